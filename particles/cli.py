@@ -1,0 +1,36 @@
+"""The ``particles`` command line."""
+
+import argparse
+import sys
+
+__all__ = ["main"]
+
+
+def _tour(args):
+    from .tour import run_tour
+
+    run_tour(args.out)
+    return 0
+
+
+def build_parser():
+    parser = argparse.ArgumentParser(
+        prog="particles",
+        description="Particle systems and mass-spring simulation: the course package's tools.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    tour = sub.add_parser("tour", help="run the course tour: figures, animations and tables")
+    tour.add_argument("--out", default="out", help="output folder (default: out)")
+    tour.set_defaults(run=_tour)
+    return parser
+
+
+def main(argv=None):
+    """Entry point of the ``particles`` console script."""
+    args = build_parser().parse_args(argv)
+    return args.run(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,483 @@
+"""ODE steppers for dX/dt = f(X, t).
+
+Every stepper has the same signature::
+
+    X_new = step(f, X, t, h)
+
+and never modifies ``X``. ``f(X, t)`` returns an array of the same shape as
+``X``. The generic steppers (:func:`euler`, :func:`midpoint`, :func:`trapezoid`,
+:func:`rk4`, :func:`implicit_euler`) accept any array shape, so they work on a
+scalar ODE, on the circle field ``f = (-y, x)`` and on a particle system alike.
+:func:`symplectic_euler` and :func:`verlet` need the second-order layout
+``X.shape == (n, 2, d)`` where ``X[:, 0]`` are positions and ``X[:, 1]``
+velocities, and ``f`` of the form ``(v, a(x, v, t))``.
+
+Each stepper carries ``.order``, its order of global accuracy: halving ``h``
+divides the error at a fixed end time by about ``2**order``.
+
+References
+----------
+.. [1] A. Witkin and D. Baraff, "Physically Based Modeling: Principles and
+   Practice", SIGGRAPH 1997 course notes, section "Differential equation basics".
+.. [2] E. Hairer, C. Lubich and G. Wanner, *Geometric Numerical Integration*,
+   2nd ed., Springer, 2006, sections I.1 and VI.3 (symplectic Euler, Verlet).
+"""
+
+import math
+
+import numpy as np
+import scipy.sparse
+import scipy.sparse.linalg
+
+from ._checks import as_float_array, method_name, positive_number
+from .errors import ConvergenceError, SimulationDiverged
+
+__all__ = [
+    "euler",
+    "midpoint",
+    "trapezoid",
+    "rk4",
+    "symplectic_euler",
+    "verlet",
+    "implicit_euler",
+    "INTEGRATORS",
+    "integrate",
+]
+
+
+def _stepper(order, explicit=True, second_order_layout=False):
+    """Decorator recording a stepper's order and kind as attributes."""
+
+    def mark(step):
+        step.order = order
+        step.explicit = explicit
+        step.second_order_layout = second_order_layout
+        return step
+
+    return mark
+
+
+def _evaluate(f, X, t):
+    """Call f(X, t) and check that it returns an array shaped like X."""
+    dX = np.asarray(f(X, t), dtype=float)
+    if dX.shape != X.shape:
+        raise ValueError(
+            f"f(X, t) must return an array of the same shape as X {X.shape}, "
+            f"got shape {dX.shape}"
+        )
+    return dX
+
+
+def _split(X):
+    """Positions and velocities of a second-order state of shape (n, 2, ...)."""
+    if X.ndim < 2 or X.shape[1] != 2:
+        raise ValueError(
+            "X must have the second-order layout (n, 2, d) with X[:, 0] positions "
+            f"and X[:, 1] velocities, got shape {X.shape}"
+        )
+    return X[:, 0], X[:, 1]
+
+
+@_stepper(order=1)
+def euler(f, X, t, h):
+    """Explicit (forward) Euler step: ``X + h f(X, t)``.
+
+    Parameters
+    ----------
+    f : callable
+        Right-hand side ``f(X, t) -> ndarray`` of the same shape as ``X``.
+    X : ndarray, any shape
+        State at time `t`. Not modified.
+    t : float
+        Time, in seconds.
+    h : float
+        Time step, in seconds, > 0.
+
+    Returns
+    -------
+    ndarray, shape of `X`
+        State at ``t + h``.
+
+    Notes
+    -----
+    First order. On the undamped oscillator ``x'' = -w**2 x`` it is unstable for
+    every ``h > 0``: each step multiplies the amplitude by ``sqrt(1 + (w h)**2)``.
+    Stable for a decaying mode ``x' = -lambda x`` only when ``h < 2 / lambda``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> euler(lambda X, t: -X, np.array([1.0]), 0.0, 0.1)
+    array([0.9])
+    """
+    X = np.asarray(X, dtype=float)
+    h = positive_number(h, "h", "seconds")
+    return X + h * _evaluate(f, X, t)
+
+
+@_stepper(order=2)
+def midpoint(f, X, t, h):
+    """Explicit midpoint step: half an Euler step, evaluate there, full step.
+
+    ``X_m = X + h/2 f(X, t)``, then ``X_new = X + h f(X_m, t + h/2)``.
+
+    Parameters and return value as for :func:`euler`.
+
+    Notes
+    -----
+    Second order, two evaluations of ``f`` per step. On the undamped oscillator
+    the amplitude grows by ``sqrt(1 + (w h)**4 / 4)`` per step: slowly unstable.
+    """
+    X = np.asarray(X, dtype=float)
+    h = positive_number(h, "h", "seconds")
+    X_m = X + 0.5 * h * _evaluate(f, X, t)
+    return X + h * _evaluate(f, X_m, t + 0.5 * h)
+
+
+@_stepper(order=2)
+def trapezoid(f, X, t, h):
+    """Explicit trapezoid (Heun) step: Euler step, evaluate there, average.
+
+    ``f_0 = f(X, t)``, ``f_1 = f(X + h f_0, t + h)``, ``X_new = X + h (f_0 + f_1) / 2``.
+
+    Parameters and return value as for :func:`euler`.
+
+    Notes
+    -----
+    Second order, two evaluations of ``f`` per step. For linear problems it
+    gives the same result as :func:`midpoint`.
+    """
+    X = np.asarray(X, dtype=float)
+    h = positive_number(h, "h", "seconds")
+    f_0 = _evaluate(f, X, t)
+    f_1 = _evaluate(f, X + h * f_0, t + h)
+    return X + 0.5 * h * (f_0 + f_1)
+
+
+@_stepper(order=4)
+def rk4(f, X, t, h):
+    """Classical fourth-order Runge-Kutta step.
+
+    ``k1 = f(X, t)``, ``k2 = f(X + h/2 k1, t + h/2)``, ``k3 = f(X + h/2 k2, t + h/2)``,
+    ``k4 = f(X + h k3, t + h)``, ``X_new = X + h (k1 + 2 k2 + 2 k3 + k4) / 6``.
+
+    Parameters and return value as for :func:`euler`.
+
+    Notes
+    -----
+    Fourth order, four evaluations of ``f`` per step. On the undamped oscillator
+    it is stable for ``w h <= 2 sqrt(2) ~ 2.83`` (with slow amplitude decay below
+    that limit).
+    """
+    X = np.asarray(X, dtype=float)
+    h = positive_number(h, "h", "seconds")
+    k1 = _evaluate(f, X, t)
+    k2 = _evaluate(f, X + 0.5 * h * k1, t + 0.5 * h)
+    k3 = _evaluate(f, X + 0.5 * h * k2, t + 0.5 * h)
+    k4 = _evaluate(f, X + h * k3, t + h)
+    return X + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+@_stepper(order=1, second_order_layout=True)
+def symplectic_euler(f, X, t, h):
+    """Symplectic (semi-implicit) Euler step: new velocity first, then position.
+
+    ``v_new = v + h a(x, v, t)``, then ``x_new = x + h v_new``.
+
+    Parameters
+    ----------
+    f : callable
+        ``f(X, t)`` of the second-order form ``(v, a)``; only its acceleration
+        part ``f(X, t)[:, 1]`` is used.
+    X : ndarray, shape (n, 2, d)
+        ``X[:, 0]`` positions (m), ``X[:, 1]`` velocities (m/s). Not modified.
+    t, h : float
+        Time and time step, in seconds.
+
+    Returns
+    -------
+    ndarray, shape (n, 2, d)
+
+    Notes
+    -----
+    First order, one evaluation of ``f`` per step, symplectic for forces that
+    depend on position only: on the undamped oscillator it is stable for
+    ``w h < 2`` and the energy error stays bounded (it oscillates, it does not
+    drift) over arbitrarily long runs [2]_.
+    """
+    X = np.asarray(X, dtype=float)
+    h = positive_number(h, "h", "seconds")
+    x, v = _split(X)
+    a = _evaluate(f, X, t)[:, 1]
+    X_new = np.empty_like(X)
+    X_new[:, 1] = v + h * a
+    X_new[:, 0] = x + h * X_new[:, 1]
+    return X_new
+
+
+@_stepper(order=2, second_order_layout=True)
+def verlet(f, X, t, h):
+    """Velocity Verlet step (kick, drift, kick).
+
+    ``v_half = v + h/2 a(x, v, t)``, ``x_new = x + h v_half``,
+    ``v_new = v_half + h/2 a(x_new, v*, t + h)``.
+
+    Parameters and return value as for :func:`symplectic_euler`.
+
+    Notes
+    -----
+    Second order, two evaluations of ``f`` per step, symplectic and
+    time-reversible for position-only forces: on the undamped oscillator it is
+    stable for ``w h < 2`` with bounded energy error [2]_.
+
+    When the force depends on velocity (damping, drag) the final kick needs a
+    velocity at ``t + h`` before it is known. We use the Euler predictor
+    ``v* = v + h a(x, v, t)``, which keeps the method second order; for
+    position-only forces ``v*`` is never used and the method is the classical
+    velocity Verlet.
+    """
+    X = np.asarray(X, dtype=float)
+    h = positive_number(h, "h", "seconds")
+    x, v = _split(X)
+    a = _evaluate(f, X, t)[:, 1]
+    v_half = v + 0.5 * h * a
+    X_pred = np.empty_like(X)
+    X_pred[:, 0] = x + h * v_half
+    X_pred[:, 1] = v + h * a
+    a_new = _evaluate(f, X_pred, t + h)[:, 1]
+    X_new = np.empty_like(X)
+    X_new[:, 0] = X_pred[:, 0]
+    X_new[:, 1] = v_half + 0.5 * h * a_new
+    return X_new
+
+
+# Without an analytic Jacobian, states up to this size get a dense finite-
+# difference Jacobian (one evaluation of f per component); larger ones are
+# solved matrix-free by GMRES.
+_DENSE_FD_MAX = 200
+
+
+def _jacobian_operator(f, Y, t, fY):
+    """Matrix-free J v ~ (f(Y + eps v) - f(Y)) / eps, as a LinearOperator."""
+    shape, N = Y.shape, Y.size
+    scale = 1.0 + np.linalg.norm(Y.ravel(), np.inf)
+
+    def matvec(u):
+        u = np.asarray(u, dtype=float).ravel()
+        norm = np.linalg.norm(u, np.inf)
+        if norm == 0.0:
+            return np.zeros(N)
+        eps = math.sqrt(np.finfo(float).eps) * scale / norm
+        return (_evaluate(f, Y + eps * u.reshape(shape), t) - fY).ravel() / eps
+
+    return scipy.sparse.linalg.LinearOperator((N, N), matvec=matvec, dtype=float)
+
+
+@_stepper(order=1, explicit=False)
+def implicit_euler(f, X, t, h, jac=None, tol=1e-10, max_iter=50):
+    """Implicit (backward) Euler step, solved by Newton's method.
+
+    Finds ``Y`` with ``Y = X + h f(Y, t + h)``. Newton's method on
+    ``G(Y) = Y - X - h f(Y, t + h)`` repeats ``(I - h J) dY = -G(Y)``, ``Y += dY``
+    with ``J = df/dX`` at the current ``Y``, starting from ``Y = X``.
+
+    Parameters
+    ----------
+    f : callable
+        Right-hand side ``f(X, t)``, same shape as ``X``.
+    X : ndarray, any shape
+        State at time `t`. Not modified.
+    t, h : float
+        Time and time step, in seconds (``h > 0``).
+    jac : callable, optional
+        ``jac(X, t)`` returning the Jacobian ``df/dX`` of the flattened state,
+        shape ``(X.size, X.size)``, as a dense array or a ``scipy.sparse``
+        matrix. Without it, the Jacobian is estimated by finite differences:
+        as a dense matrix (one evaluation of ``f`` per state component) for
+        states of up to 200 numbers, and matrix-free inside GMRES for larger
+        ones (one evaluation per Krylov iteration). Give `jac` for large systems.
+    tol : float
+        Relative tolerance: Newton stops when the residual
+        ``Y - X - h f(Y, t + h)`` or the last update is below
+        ``tol * max(max|X|, max|Y|)``.
+    max_iter : int
+        Largest number of Newton iterations.
+
+    Returns
+    -------
+    ndarray, shape of `X`
+
+    Raises
+    ------
+    ConvergenceError
+        When Newton's method does not converge in `max_iter` iterations.
+
+    Notes
+    -----
+    First order and A-stable: stable for every ``h > 0`` on any decaying or
+    oscillating linear system. The price is numerical damping: on the undamped
+    oscillator each step multiplies the amplitude by ``1 / sqrt(1 + (w h)**2)``.
+    For a linear ``f`` with an exact `jac`, one Newton iteration solves the step.
+    """
+    X = np.asarray(X, dtype=float)
+    h = positive_number(h, "h", "seconds")
+    t_new = t + h
+    Y = X.copy()
+    dY = np.full(X.size, np.inf)
+    for iteration in range(max_iter + 1):
+        fY = _evaluate(f, Y, t_new)
+        G = (Y - X - h * fY).ravel()
+        small = tol * max(np.max(np.abs(X), initial=0.0), np.max(np.abs(Y), initial=0.0))
+        if np.max(np.abs(G), initial=0.0) <= small or np.max(np.abs(dY)) <= small:
+            return Y
+        if iteration == max_iter:
+            break
+        dY = _newton_update(f, Y, t_new, h, fY, G, jac)
+        Y = Y + dY.reshape(X.shape)
+        if not np.all(np.isfinite(Y)):
+            break
+    raise ConvergenceError(
+        f"implicit_euler: Newton's method did not converge in {max_iter} iterations "
+        f"at t = {t:.6g} s with h = {h:.6g} s (last update max|dY| = "
+        f"{np.max(np.abs(dY)):.3g}). Reduce h, or pass an exact jacobian as jac=."
+    )
+
+
+def _newton_update(f, Y, t, h, fY, G, jac):
+    """Solve ``(I - h J) dY = -G`` with J = df/dX at (Y, t)."""
+    N = Y.size
+    if jac is not None:
+        J = jac(Y, t)
+        if J.shape != (N, N):
+            raise ValueError(f"jac(X, t) must return a ({N}, {N}) matrix, got shape {J.shape}")
+        if scipy.sparse.issparse(J):
+            A = scipy.sparse.identity(N, format="csc") - h * J.tocsc()
+            return scipy.sparse.linalg.spsolve(A, -G)
+        return np.linalg.solve(np.eye(N) - h * np.asarray(J, dtype=float), -G)
+    if N <= _DENSE_FD_MAX:
+        J = _dense_jacobian(f, Y, t, fY)
+        return np.linalg.solve(np.eye(N) - h * J, -G)
+    J = _jacobian_operator(f, Y, t, fY)
+    A = scipy.sparse.linalg.LinearOperator((N, N), matvec=lambda u: u - h * J.matvec(u), dtype=float)
+    dY, _ = scipy.sparse.linalg.gmres(A, -G, rtol=1e-8, atol=0.0, restart=min(N, 100), maxiter=20)
+    return dY
+
+
+def _dense_jacobian(f, Y, t, fY):
+    """Forward-difference Jacobian, one evaluation of f per state component."""
+    y = Y.ravel()
+    eps = math.sqrt(np.finfo(float).eps) * (1.0 + np.abs(y))
+    J = np.empty((y.size, y.size))
+    for c in range(y.size):  # a loop over Jacobian columns: f is a black box
+        y_c = y.copy()
+        y_c[c] += eps[c]
+        J[:, c] = (_evaluate(f, y_c.reshape(Y.shape), t) - fY).ravel() / eps[c]
+    return J
+
+
+INTEGRATORS = {
+    "euler": euler,
+    "midpoint": midpoint,
+    "trapezoid": trapezoid,
+    "rk4": rk4,
+    "symplectic_euler": symplectic_euler,
+    "verlet": verlet,
+    "implicit_euler": implicit_euler,
+}
+"""Stepper by name, in teaching order."""
+
+
+def _name_of(step):
+    return next((k for k, s in INTEGRATORS.items() if s is step), getattr(step, "__name__", "?"))
+
+
+def step_times(t0, t1, h):
+    """Times ``t0, t0 + h, ...`` ending exactly at ``t1`` (last step shortened).
+
+    A last step shorter than ``1e-9 h`` is merged into the one before, so that
+    ``(t1 - t0) / h`` equal to an integer up to round-off gives equal steps.
+    """
+    t0, t1 = float(t0), float(t1)
+    if not (np.isfinite(t0) and np.isfinite(t1)):
+        raise ValueError(f"t0 and t1 must be finite, got t0={t0!r}, t1={t1!r}")
+    if t1 < t0:
+        raise ValueError(f"t1 must be >= t0, got t0={t0!r}, t1={t1!r}")
+    h = positive_number(h, "h", "seconds")
+    n_steps = max(1, math.ceil((t1 - t0) / h - 1e-9)) if t1 > t0 else 0
+    t = t0 + h * np.arange(n_steps + 1)
+    t[-1] = t1
+    return t
+
+
+def _empty_frames(K, X):
+    """An empty array of K states, each stored in the memory order of X.
+
+    A Fortran-ordered state (see :class:`particles.ParticleSystem`) gets
+    frames that are Fortran-ordered too, so recording a frame is a plain copy.
+    """
+    if X.flags.f_contiguous and not X.flags.c_contiguous:
+        return np.empty((K,) + X.shape[::-1]).transpose(0, *range(X.ndim, 0, -1))
+    return np.empty((K,) + X.shape)
+
+
+def integrate(f, X0, t0, t1, h, method="rk4", every=1, **options):
+    """Integrate dX/dt = f(X, t) from `t0` to `t1` with fixed steps of size `h`.
+
+    Parameters
+    ----------
+    f : callable
+        ``f(X, t) -> ndarray`` of the shape of ``X0``.
+    X0 : array_like, any shape
+        Initial state. Not modified.
+    t0, t1 : float
+        Start and end times, in seconds, ``t1 >= t0``.
+    h : float
+        Time step, in seconds. The last step is shortened to land on `t1`.
+    method : str or callable
+        A key of :data:`INTEGRATORS` or a stepper ``step(f, X, t, h)``.
+    every : int
+        Record every `every`-th state (the first and last are always recorded).
+    **options
+        Passed to the stepper (e.g. ``jac=`` for ``"implicit_euler"``).
+
+    Returns
+    -------
+    t : ndarray, shape (K,)
+        Recorded times, ``t[0] == t0`` and ``t[-1] == t1``.
+    X : ndarray, shape (K,) + X0.shape
+        ``X[k]`` is the state at ``t[k]``.
+
+    Raises
+    ------
+    SimulationDiverged
+        When the state becomes inf or NaN, naming the step and the time.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t, X = integrate(lambda X, t: -X, [1.0], 0.0, 1.0, 0.01)
+    >>> bool(abs(X[-1, 0] - np.exp(-1.0)) < 1e-9)
+    True
+    """
+    step = method_name(method, INTEGRATORS)
+    X = as_float_array(X0, "X0")
+    times = step_times(t0, t1, h)
+    if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
+        raise ValueError(f"every must be a positive integer, got {every!r}")
+    if getattr(step, "second_order_layout", False):
+        _split(X)
+    keep = list(range(0, len(times), every))
+    if keep[-1] != len(times) - 1:
+        keep.append(len(times) - 1)
+    out = _empty_frames(len(keep), X)
+    out[0] = X
+    slot = 1
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        for k in range(1, len(times)):
+            X = step(f, X, times[k - 1], times[k] - times[k - 1], **options)
+            if not np.all(np.isfinite(X)):
+                raise SimulationDiverged(k, times[k - 1], float(h), _name_of(step))
+            if slot < len(keep) and keep[slot] == k:
+                out[slot] = X
+                slot += 1
+    return times[keep], out

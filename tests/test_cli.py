@@ -1,0 +1,46 @@
+"""The command line: the tour writes its figures, animation and tables."""
+
+import csv
+import subprocess
+import sys
+
+from PIL import Image
+
+from particles.cli import main
+from particles.tour import force_field_scene, lennard_jones_costs
+
+
+def test_tour_writes_files_and_prints_table(tmp_path, capsys):
+    assert main(["tour", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    for name in ("convergence.png", "convergence.svg", "convergence.csv", "force_field.gif",
+                 "lennard_jones_costs.csv"):
+        assert (tmp_path / name).stat().st_size > 0, name
+    assert "rk4                       4      4.0" in out
+    with Image.open(tmp_path / "force_field.gif") as gif:
+        assert gif.n_frames == len(force_field_scene()[0])
+    rows = list(csv.DictReader(open(tmp_path / "convergence.csv")))
+    assert {r["method"] for r in rows} >= {"euler", "rk4", "verlet", "implicit_euler"}
+
+
+def test_force_field_scene_stays_bounded():
+    """The tour's swirl keeps its particles on screen (damping balances the fields)."""
+    t, X = force_field_scene(n=50)
+    assert X.shape == (len(t), 50, 2, 2)
+    assert abs(X[:, :, 0]).max() < 2.5
+
+
+def test_lennard_jones_costs_rows():
+    rows = lennard_jones_costs(sizes=(100, 200))
+    assert [r["n"] for r in rows] == [100, 200]
+    assert all(r["pairs"] > 0 and r["all_s"] > 0 and r["cells_s"] > 0 for r in rows)
+
+
+def test_console_script_help():
+    result = subprocess.run([sys.executable, "-m", "particles", "--help"], capture_output=True, text=True)
+    assert result.returncode == 0 and "tour" in result.stdout
+
+
+def test_unknown_command_fails_cleanly():
+    result = subprocess.run([sys.executable, "-m", "particles", "fly"], capture_output=True, text=True)
+    assert result.returncode == 2 and "invalid choice" in result.stderr

@@ -1,0 +1,282 @@
+"""Forces: formulas, symmetries, momentum, potentials, and bucket grid == all pairs."""
+
+import numpy as np
+import pytest
+
+from particles import ParticleSystem
+from particles.forces import (
+    Attractor,
+    Damping,
+    Field,
+    Gravity,
+    LennardJones,
+    NBodyGravity,
+    Vortex,
+    Wind,
+    scatter_pair_forces,
+)
+
+
+def numerical_gradient(energy, x, eps=1e-6):
+    """Central-difference gradient of a scalar function of positions (test helper)."""
+    grad = np.zeros_like(x)
+    for idx in np.ndindex(x.shape):
+        e = np.zeros_like(x)
+        e[idx] = eps
+        grad[idx] = (energy(x + e) - energy(x - e)) / (2 * eps)
+    return grad
+
+
+def test_gravity_is_mass_proportional_and_can_point_up():
+    x = np.zeros((3, 2))
+    m = np.array([1.0, 2.0, 0.5])
+    np.testing.assert_allclose(Gravity([0, -9.81])(x, m=m), np.outer(m, [0, -9.81]))
+    assert np.all(Gravity([0, 0.3])(x, m=m)[:, 1] > 0)  # smoke rises
+
+
+def test_gravity_dimension_mismatch_is_reported():
+    with pytest.raises(ValueError, match="g has 3 components but the particles live in 2 dimensions"):
+        Gravity([0, 0, -9.81])(np.zeros((1, 2)))
+
+
+def test_damping_opposes_velocity():
+    v = np.array([[1.0, -2.0], [0.0, 3.0]])
+    np.testing.assert_allclose(Damping(0.4)(np.zeros((2, 2)), v), -0.4 * v)
+    with pytest.raises(ValueError, match="d must be a finite number >= 0"):
+        Damping(-1.0)
+
+
+def test_wind_constant_and_gusting():
+    """Calm wind is uniform; gusts vary with time and along the wind."""
+    x = np.array([[0.0, 0.0], [0.25, 0.0]])
+    calm = Wind([2.0, 0.0])
+    np.testing.assert_allclose(calm(x, t=3.0), [[2.0, 0.0]] * 2)
+    gusty = Wind([2.0, 0.0], gust=0.5, period=1.0, wavelength=1.0)
+    F0, F1 = gusty(x, t=0.0), gusty(x, t=0.25)
+    np.testing.assert_allclose(F0[:, 1], 0.0)
+    np.testing.assert_allclose(F0[:, 0], 2.0 * (1 + 0.5 * np.sin(-2 * np.pi * x[:, 0])))
+    assert not np.allclose(F0, F1)
+    assert F1[1, 0] == pytest.approx(2.0)  # gust front: phase 0 at x = 0.25, t = 0.25
+
+
+def test_attractor_formula_repulser_and_potential():
+    x = np.array([[1.0, 0.0], [0.0, -2.0], [3.0, 4.0]])
+    a = Attractor([0.0, 0.0], strength=2.0, softening=0.5)
+    F = a(x)
+    r = -x
+    r2 = np.sum(r**2, axis=1) + 0.25
+    np.testing.assert_allclose(F, 2.0 * r / (r2**1.5)[:, None])
+    np.testing.assert_allclose(Attractor([0, 0], -2.0, softening=0.5)(x), -F)  # negative repels
+    grad = numerical_gradient(lambda y: a.potential_energy(y, None), x)
+    np.testing.assert_allclose(F, -grad, rtol=1e-6, atol=1e-9)
+
+
+def test_attractor_moving_center():
+    """A centre given as a function of time moves with t."""
+    a = Attractor(lambda t: [t, 0.0], strength=1.0)
+    x = np.array([[1.0, 0.0]])
+    assert a(x, t=0.0)[0, 0] < 0 < a(x, t=2.0)[0, 0]
+
+
+def test_vortex_2d_is_tangential_counterclockwise():
+    rng = np.random.default_rng(1)
+    x = rng.normal(size=(50, 2))
+    F = Vortex([0.0, 0.0], strength=1.5, core=0.2)(x)
+    np.testing.assert_allclose(np.sum(F * x, axis=1), 0.0, atol=1e-12)  # no radial part
+    assert np.all(x[:, 0] * F[:, 1] - x[:, 1] * F[:, 0] > 0)  # positive torque about z
+    r = np.linalg.norm(x, axis=1)
+    np.testing.assert_allclose(np.linalg.norm(F, axis=1), 1.5 * r / (r**2 + 0.04))
+
+
+def test_vortex_3d_about_axis():
+    """In 3D the swirl is perpendicular to the axis and to the radius."""
+    rng = np.random.default_rng(2)
+    axis = np.array([1.0, 1.0, 0.0])
+    x = rng.normal(size=(40, 3))
+    c = np.array([0.5, 0.0, 1.0])
+    F = Vortex(c, strength=2.0, axis=axis)(x)
+    np.testing.assert_allclose(F @ axis, 0.0, atol=1e-12)
+    np.testing.assert_allclose(np.sum(F * (x - c), axis=1), 0.0, atol=1e-12)
+    with pytest.raises(ValueError, match="axis must be a non-zero vector"):
+        Vortex(c, 1.0, axis=[0, 0, 0])
+
+
+def test_field_calls_user_function_and_checks_shape():
+    fn = Field(lambda x, t: np.sin(t) * x)
+    x = np.array([[1.0, 2.0]])
+    np.testing.assert_allclose(fn(x, t=0.5), np.sin(0.5) * x)
+    with pytest.raises(ValueError, match=r"fn\(x, t\) must return shape \(1, 2\), got \(2,\)"):
+        Field(lambda x, t: np.zeros(2))(x)
+    with pytest.raises(ValueError, match="fn must be a function"):
+        Field(3.0)
+
+
+def test_scatter_pair_forces_equal_and_opposite_with_repeats():
+    """Repeated indices accumulate (unlike F[i] += f) and the total is zero."""
+    F = np.zeros((3, 2))
+    i, j = np.array([0, 0, 1]), np.array([1, 2, 2])
+    f = np.array([[1.0, 0.0], [0.0, 2.0], [3.0, 3.0]])
+    scatter_pair_forces(F, i, j, f)
+    np.testing.assert_allclose(F, [[1.0, 2.0], [2.0, 3.0], [-3.0, -5.0]])
+    np.testing.assert_allclose(F.sum(axis=0), 0.0)
+
+
+# -- N-body ------------------------------------------------------------------
+
+
+def test_nbody_two_bodies_inverse_square():
+    """|F| = G m1 m2 / r^2 along the line joining the bodies, equal and opposite."""
+    x = np.array([[0.0, 0.0, 0.0], [3.0, 4.0, 0.0]])
+    m = np.array([2.0, 5.0])
+    F = NBodyGravity(G=1.5)(x, m=m)
+    np.testing.assert_allclose(F[0], 1.5 * 2 * 5 / 25 * np.array([0.6, 0.8, 0.0]))
+    np.testing.assert_allclose(F[1], -F[0])
+
+
+def test_nbody_momentum_and_potential():
+    """Total force zero to round-off; force is minus the gradient of the potential."""
+    rng = np.random.default_rng(4)
+    x = rng.normal(size=(60, 3))
+    m = rng.uniform(0.5, 2.0, 60)
+    nb = NBodyGravity(G=1.0, softening=0.05)
+    F = nb(x, m=m)
+    assert np.abs(F.sum(axis=0)).max() < 1e-12 * np.abs(F).max() * 60
+    grad = numerical_gradient(lambda y: nb.potential_energy(y, m), x, eps=1e-6)
+    np.testing.assert_allclose(F, -grad, rtol=1e-5, atol=1e-6)
+
+
+def test_nbody_blocks_match_direct_sum():
+    """The blocked computation equals a direct double sum (many blocks for large n)."""
+    rng = np.random.default_rng(5)
+    x = rng.normal(size=(1200, 2))
+    m = rng.uniform(1, 2, 1200)
+    F = NBodyGravity(softening=0.1)(x, m=m)
+    k = 17
+    r = x - x[k]
+    r2 = np.sum(r**2, axis=1) + 0.01
+    r2[k] = np.inf
+    np.testing.assert_allclose(F[k], (m[k] * m / r2**1.5) @ r, rtol=1e-10)
+
+
+def test_two_body_orbit_conserves_energy():
+    """A circular two-body orbit with Verlet keeps its energy within 1e-4."""
+    G, M = 1.0, 1.0
+    x = np.array([[0.0, 0.0], [1.0, 0.0]])
+    v = np.array([[0.0, 0.0], [0.0, 1.0]])
+    ps = ParticleSystem(x, v=v, m=[M, 1e-6], forces=[NBodyGravity(G)])
+    E0 = ps.kinetic_energy() + ps.potential_energy()
+    ps.run(2 * np.pi, 0.005, method="verlet")
+    assert abs(ps.kinetic_energy() + ps.potential_energy() - E0) < 1e-4 * abs(E0)
+    np.testing.assert_allclose(ps.X[1, 0], [1.0, 0.0], atol=1e-2)  # back after one period
+
+
+# -- Lennard-Jones -----------------------------------------------------------
+
+
+def test_lennard_jones_formula_and_zero_crossing():
+    """f(r) = k1/r^m - k2/r^n; the 12-6 force vanishes at r = 2^(1/6) sigma."""
+    lj = LennardJones.from_epsilon_sigma(epsilon=2.0, sigma=1.5)
+    assert (lj.k1, lj.k2, lj.m, lj.n) == (48 * 2 * 1.5**12, 24 * 2 * 1.5**6, 13, 7)
+    r0 = 2 ** (1 / 6) * 1.5
+    assert lj.magnitude(r0) == pytest.approx(0.0, abs=1e-12)
+    assert lj.magnitude(0.9 * r0) > 0 > lj.magnitude(1.1 * r0)
+    x = np.array([[0.0, 0.0], [1.2, 0.0]])
+    F = lj(x)
+    np.testing.assert_allclose(F[0], [-lj.magnitude(1.2), 0.0])
+    np.testing.assert_allclose(F[1], -F[0])
+    assert np.all(lj(np.array([[0.0, 0.0], [3.76, 0.0]])) == 0.0)  # beyond 2.5 sigma
+
+
+def test_lennard_jones_general_exponents():
+    """Non-integer exponents use the same formula."""
+    lj = LennardJones(k1=2.0, k2=1.0, m=9.5, n=4.5, cutoff=3.0)
+    F = lj(np.array([[0.0, 0.0, 0.0], [0.0, 1.3, 0.0]]))
+    assert F[1, 1] == pytest.approx(2.0 / 1.3**9.5 - 1.0 / 1.3**4.5)
+
+
+def random_liquid(n, d, density, seed):
+    rng = np.random.default_rng(seed)
+    side = (n / density) ** (1 / d)
+    # jittered lattice: no overlapping particles, as in a liquid
+    k = int(np.ceil(n ** (1 / d)))
+    grid = np.stack(np.meshgrid(*[np.arange(k)] * d, indexing="ij"), -1).reshape(-1, d)[:n]
+    return (grid + 0.5 + rng.uniform(-0.1, 0.1, (n, d))) * side / k
+
+
+@pytest.mark.parametrize("d", [2, 3])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_lennard_jones_cells_equal_all_pairs(d, seed):
+    """Bucket grid and all pairs agree to 1e-10 on random liquids."""
+    x = random_liquid(700, d, 0.8, seed)
+    F_cells = LennardJones.from_epsilon_sigma(neighbors="cells")(x)
+    F_all = LennardJones.from_epsilon_sigma(neighbors="all")(x)
+    assert np.abs(F_all).max() > 1.0
+    np.testing.assert_allclose(F_cells, F_all, rtol=0, atol=1e-10)
+
+
+def test_lennard_jones_cells_on_cell_boundaries_and_beyond_grid():
+    """Particles exactly on cell faces, at the cutoff, and far outside the grid bulk."""
+    cut = 2.5
+    cell = cut / 2
+    # a lattice with spacing exactly the cell size: every particle on a cell boundary
+    g = np.arange(6) * cell
+    x = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)
+    # pairs at exactly the cutoff, just inside it, and a far-away cluster (outliers)
+    extra = np.array([[0.0, 0.0, 20.0], [0.0, 0.0, 20.0 + cut], [0.0, 0.0, 30.0],
+                      [0.0, cut * (1 - 1e-12), 30.0], [1e4, 1e4, 1e4], [1e4 + 1.1, 1e4, 1e4]])
+    x = np.concatenate([x, extra])
+    lj = dict(k1=1.0, k2=1.0, m=13, n=7, cutoff=cut)
+    F_all = LennardJones(**lj, neighbors="all")(x)
+    for k in (1, 2, 3):
+        F_cells = LennardJones(**lj, neighbors="cells", cells_per_cutoff=k, skin=0.0)(x)
+        np.testing.assert_allclose(F_cells, F_all, rtol=0, atol=1e-10)
+    assert np.all(F_all[-6:-4] == 0.0)  # exactly at the cutoff: no force
+    assert F_all[-3, 1] != 0.0 and np.all(F_all[-2:, 0] != 0)
+
+
+def test_lennard_jones_momentum_conserved():
+    x = random_liquid(500, 3, 0.8, 7)
+    F = LennardJones.from_epsilon_sigma()(x)
+    assert np.abs(F.sum(axis=0)).max() < 1e-10
+
+
+def test_lennard_jones_force_is_minus_gradient_of_potential():
+    x = random_liquid(40, 2, 0.6, 3)
+    lj = LennardJones.from_epsilon_sigma()
+    grad = numerical_gradient(lambda y: lj.potential_energy(y), x, eps=1e-7)
+    np.testing.assert_allclose(lj(x), -grad, rtol=1e-5, atol=1e-5)
+
+
+def test_verlet_list_reused_and_still_exact():
+    """With a skin, small moves reuse the pair list; forces stay equal to all pairs."""
+    rng = np.random.default_rng(9)
+    x = random_liquid(400, 2, 0.8, 9)
+    lj = LennardJones.from_epsilon_sigma(skin=0.4)
+    ref = LennardJones.from_epsilon_sigma(neighbors="all")
+    for step in range(10):
+        np.testing.assert_allclose(lj(x), ref(x), atol=1e-10)
+        x = x + rng.uniform(-0.02, 0.02, x.shape)
+    assert lj._list.builds == 1  # total motion < skin/2: never rebuilt
+    x = x + rng.uniform(-0.5, 0.5, x.shape)
+    np.testing.assert_allclose(lj(x), ref(x), atol=1e-10)
+    assert lj._list.builds == 2
+
+
+def test_lennard_jones_bad_parameters():
+    with pytest.raises(ValueError, match="exponents must satisfy m > n > 1"):
+        LennardJones(1.0, 1.0, 6, 12, 2.5)
+    with pytest.raises(ValueError, match="neighbors must be 'cells' or 'all'"):
+        LennardJones(1.0, 1.0, 13, 7, 2.5, neighbors="grid")
+    with pytest.raises(ValueError, match="cutoff must be a positive finite number"):
+        LennardJones(1.0, 1.0, 13, 7, -1.0)
+
+
+def test_forces_do_not_modify_inputs():
+    """x and v are read, never written."""
+    rng = np.random.default_rng(0)
+    x, v = rng.normal(size=(30, 3)), rng.normal(size=(30, 3))
+    x.setflags(write=False)
+    v.setflags(write=False)
+    for force in [Gravity([0, 0, -1]), Damping(1.0), Wind([1, 0, 0], gust=0.3), Attractor([0, 0, 0], 1.0),
+                  Vortex([0, 0, 0], 1.0), NBodyGravity(softening=0.1), LennardJones.from_epsilon_sigma()]:
+        force(x, v, 0.5)

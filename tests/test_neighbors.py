@@ -1,0 +1,112 @@
+"""Bucket-grid pair search against the all-pairs reference, and the Verlet list."""
+
+import numpy as np
+import pytest
+
+from particles.neighbors import CellGrid, VerletList, all_pairs, cell_pairs
+
+
+def as_set(i, j):
+    return set(zip(np.minimum(i, j).tolist(), np.maximum(i, j).tolist()))
+
+
+@pytest.mark.parametrize("d", [1, 2, 3])
+@pytest.mark.parametrize("k", [1, 2, 3])
+def test_cell_pairs_equal_all_pairs(d, k):
+    """Same set of pairs, each unordered pair once, in 1, 2 and 3 dimensions."""
+    rng = np.random.default_rng(d * 10 + k)
+    x = rng.uniform(0, 10, size=(400, d))
+    i, j = cell_pairs(x, 1.3, cells_per_cutoff=k)
+    assert np.all(i != j)
+    assert len(as_set(i, j)) == len(i)  # no duplicates
+    assert as_set(i, j) == as_set(*all_pairs(x, 1.3))
+    assert len(i) > 0
+
+
+def test_strict_cutoff_and_cell_boundaries():
+    """Pairs at exactly the cutoff are excluded; a hair closer included; faces are safe."""
+    cut = 1.0
+    x = np.array([[0.0, 0.0], [1.0, 0.0], [0.5, 0.5], [0.5, 0.5 + (1 - 1e-12)], [3.0, 3.0], [3.5, 3.0]])
+    found = as_set(*cell_pairs(x, cut))
+    assert (0, 1) not in found and (2, 3) in found and (4, 5) in found
+    # every particle on a cell face (spacing = cell size = cutoff / 2)
+    g = np.arange(8) * 0.5
+    lattice = np.stack(np.meshgrid(g, g, indexing="ij"), -1).reshape(-1, 2)
+    assert as_set(*cell_pairs(lattice, cut)) == as_set(*all_pairs(lattice, cut))
+
+
+def test_outliers_and_explicit_bounds_are_clamped_exactly():
+    """Particles beyond the grid land in edge cells and still find their partners."""
+    rng = np.random.default_rng(0)
+    bulk = rng.uniform(0, 5, size=(300, 3))
+    far = np.array([[1e5, 0, 0], [1e5 + 0.5, 0, 0], [-1e5, 3, 3], [-1e5, 3.2, 3.1]])
+    x = np.concatenate([bulk, far])
+    ref = as_set(*all_pairs(x, 1.0))
+    assert as_set(*cell_pairs(x, 1.0)) == ref
+    # a grid deliberately smaller than the cloud: most particles clamped
+    grid = CellGrid(x, 1.0, bounds=([1.0, 1.0, 1.0], [2.0, 2.0, 2.0]))
+    assert as_set(*grid.pairs()) == ref
+
+
+def test_sparse_points_get_larger_cells_and_stay_exact():
+    """A few points spread over a huge box do not allocate a huge grid."""
+    rng = np.random.default_rng(1)
+    x = rng.uniform(0, 1e4, size=(50, 3))
+    x[1] = x[0] + [0.3, 0.0, 0.0]
+    grid = CellGrid(x, 1.0)
+    assert np.prod(grid.shape) < 1e6
+    assert as_set(*grid.pairs()) == as_set(*all_pairs(x, 1.0)) == {(0, 1)}
+
+
+def test_grid_sorts_particles_by_cell():
+    """order/start describe each cell's particles as a contiguous slice."""
+    rng = np.random.default_rng(2)
+    x = rng.uniform(0, 4, size=(100, 2))
+    grid = CellGrid(x, 1.0, cells_per_cutoff=1)
+    counts = np.diff(grid.start)
+    assert counts.sum() == 100
+    cells = np.floor((x - x.min(axis=0)) / grid.cell_size).astype(int) + 1
+    for c in np.flatnonzero(counts)[:10]:
+        members = grid.order[grid.start[c]:grid.start[c + 1]]
+        keys = cells[members] @ grid.strides
+        assert np.all(keys == c)
+
+
+def test_tiny_inputs():
+    assert [len(a) for a in cell_pairs(np.zeros((0, 2)), 1.0)] == [0, 0]
+    assert [len(a) for a in cell_pairs(np.zeros((1, 3)), 1.0)] == [0, 0]
+    i, j = cell_pairs(np.zeros((3, 2)), 1.0)  # coincident points interact
+    assert as_set(i, j) == {(0, 1), (0, 2), (1, 2)}
+
+
+def test_bad_arguments():
+    with pytest.raises(ValueError, match="cutoff must be a positive finite number"):
+        cell_pairs(np.zeros((2, 2)), 0.0)
+    with pytest.raises(ValueError, match="cells_per_cutoff must be a positive integer"):
+        cell_pairs(np.zeros((2, 2)), 1.0, cells_per_cutoff=0)
+    with pytest.raises(ValueError, match="x must have 2 dimensions"):
+        cell_pairs(np.zeros(5), 1.0)
+    with pytest.raises(ValueError, match="bounds must be"):
+        CellGrid(np.zeros((2, 2)), 1.0, bounds=([1, 1], [0, 0]))
+
+
+def test_verlet_list_rebuilds_only_when_needed():
+    """Rebuilt when some particle moved more than skin/2, or when n changes."""
+    rng = np.random.default_rng(3)
+    x = rng.uniform(0, 10, size=(200, 2))
+    vl = VerletList(cutoff=1.0, skin=0.4)
+    i, j = vl.pairs(x)
+    assert vl.builds == 1
+    assert as_set(i, j) == as_set(*all_pairs(x, 1.4))
+    y = x.copy()
+    y[5] += [0.19, 0.0]
+    vl.pairs(y)
+    assert vl.builds == 1
+    y[5] += [0.02, 0.0]  # now 0.21 > skin / 2
+    vl.pairs(y)
+    assert vl.builds == 2
+    vl.pairs(y[:-1])
+    assert vl.builds == 3
+    vl.reset()
+    vl.pairs(y[:-1])
+    assert vl.builds == 4

@@ -1,0 +1,158 @@
+"""ParticleSystem: the derivative, pins and their reaction, running, errors."""
+
+import numpy as np
+import pytest
+
+from particles import ParticleSystem, SimulationDiverged
+from particles.forces import Damping, Field, Gravity, NBodyGravity
+
+g = np.array([0.0, -9.81])
+
+
+def test_derivative_is_velocity_and_acceleration():
+    """f(X, t) = (v, F/m) particle by particle, as on the slide."""
+    x = [[0.0, 0.0], [1.0, 2.0], [3.0, -1.0]]
+    v = [[1.0, 0.0], [0.0, 2.0], [-1.0, 1.0]]
+    m = [1.0, 2.0, 4.0]
+    ps = ParticleSystem(x, v=v, m=m, forces=[Gravity(g), Damping(0.5)])
+    dX = ps.derivative(ps.state(), 0.0)
+    np.testing.assert_allclose(dX[:, 0], v)
+    F = np.array(m)[:, None] * g - 0.5 * np.array(v)
+    np.testing.assert_allclose(dX[:, 1], F / np.array(m)[:, None])
+
+
+def test_state_layout_and_copy():
+    """state() is (n, 2, d), positions then velocities, and a copy."""
+    ps = ParticleSystem([[1.0, 2.0, 3.0]], v=[[4.0, 5.0, 6.0]])
+    X = ps.state()
+    assert X.shape == (1, 2, 3) and ps.n == 1 and ps.d == 3
+    np.testing.assert_array_equal(X.ravel(), [1, 2, 3, 4, 5, 6])  # the slide's stacked vector
+    X[:] = 0
+    assert ps.X[0, 0, 0] == 1.0
+
+
+def test_projectile_exact_with_rk4():
+    """Under gravity alone RK4 is exact (the solution is a quadratic)."""
+    ps = ParticleSystem([[0.0, 10.0]], v=[[2.0, 3.0]], forces=[Gravity(g)])
+    t, X = ps.run(1.3, 0.1, method="rk4")
+    np.testing.assert_allclose(X[:, 0, 0, 0], 2.0 * t, atol=1e-12)
+    np.testing.assert_allclose(X[:, 0, 0, 1], 10.0 + 3.0 * t + 0.5 * g[1] * t**2, atol=1e-12)
+    assert ps.t == pytest.approx(1.3)
+
+
+def test_damping_decays_velocity_exponentially():
+    """F = -d v gives v(t) = v0 exp(-d t / m)."""
+    ps = ParticleSystem([[0.0, 0.0]], v=[[1.0, -2.0]], m=2.0, forces=[Damping(3.0)])
+    t, X = ps.run(2.0, 0.01, method="rk4")
+    np.testing.assert_allclose(X[:, 0, 1], np.outer(np.exp(-1.5 * t), [1.0, -2.0]), rtol=1e-8)
+
+
+def test_pinned_particles_do_not_move_and_reaction_balances():
+    """A pinned particle keeps its place; the pin's force is minus all other forces."""
+    spring = Field(lambda x, t: -10.0 * (x - [0.0, 1.0]))
+    ps = ParticleSystem([[0.0, 0.0], [1.0, 1.0]], m=[2.0, 1.0], forces=[Gravity(g), spring], pinned=[0])
+    t, X = ps.run(1.0, 0.01)
+    np.testing.assert_array_equal(X[:, 0, 0], [[0.0, 0.0]] * len(t))
+    np.testing.assert_array_equal(X[:, 0, 1], 0.0)
+    assert np.ptp(X[:, 1, 0, 0]) > 0.1  # the free one moves
+    R = ps.reaction_forces(X[0], 0.0)
+    expected = -(2.0 * g - 10.0 * (np.array([0.0, 0.0]) - [0.0, 1.0]))
+    np.testing.assert_allclose(R, [expected])
+
+
+def test_hanging_mass_pin_carries_the_weight():
+    """Inverse dynamics: a mass on a pin feels m g; the pin pushes back with -m g."""
+    ps = ParticleSystem([[0.0, 0.0], [5.0, 5.0]], m=[3.0, 1.0], forces=[Gravity(g)], pinned=np.array([True, False]))
+    np.testing.assert_allclose(ps.reaction_forces(), [-3.0 * g])
+    assert ps.pinned.tolist() == [0]
+
+
+def test_momentum_conserved_by_internal_forces():
+    """With only pairwise forces, total momentum stays constant during a run."""
+    rng = np.random.default_rng(0)
+    ps = ParticleSystem(rng.normal(size=(20, 3)), v=rng.normal(size=(20, 3)), m=rng.uniform(1, 2, 20),
+                        forces=[NBodyGravity(G=0.1, softening=0.1)])
+    p0 = ps.momentum()
+    ps.run(1.0, 0.01, method="verlet")
+    np.testing.assert_allclose(ps.momentum(), p0, atol=1e-12)
+
+
+def test_run_every_and_step():
+    """run(..., every=k) records every k-th state; step() advances by h."""
+    ps = ParticleSystem([[0.0, 0.0]], v=[[1.0, 0.0]])
+    t, X = ps.run(1.0, 0.1, every=5)
+    np.testing.assert_allclose(t, [0.0, 0.5, 1.0])
+    assert X.shape == (3, 1, 2, 2)
+    X1 = ps.step(0.25, method="euler")
+    assert ps.t == pytest.approx(1.25)
+    np.testing.assert_allclose(X1[0, 0], [1.25, 0.0])
+
+
+def test_energy_bookkeeping_under_gravity():
+    """Kinetic plus potential energy is conserved along an exact projectile path."""
+    ps = ParticleSystem([[0.0, 0.0], [1.0, 5.0]], v=[[1.0, 4.0], [0.0, 0.0]], m=[1.0, 3.0], forces=[Gravity(g)])
+    E0 = ps.kinetic_energy() + ps.potential_energy()
+    ps.run(0.8, 0.05, method="rk4")
+    assert ps.kinetic_energy() + ps.potential_energy() == pytest.approx(E0, rel=1e-12)
+
+
+def test_divergence_in_run_names_step_and_leaves_system_unchanged():
+    """A stiff field with a large step raises SimulationDiverged; the state is kept."""
+    stiff = Field(lambda x, t: -1e6 * x)
+    ps = ParticleSystem([[1.0, 0.0]], forces=[stiff])
+    with pytest.raises(SimulationDiverged, match=r"diverged at step \d+ \(t = .*stability limit"):
+        ps.run(10.0, 0.01, method="euler")
+    np.testing.assert_array_equal(ps.X[0, 0], [1.0, 0.0])
+    assert ps.t == 0.0
+
+
+def test_derivative_does_not_modify_state():
+    ps = ParticleSystem([[0.0, 1.0]], v=[[1.0, 0.0]], forces=[Gravity(g), Damping(1.0)])
+    X = ps.state()
+    X.setflags(write=False)
+    ps.derivative(X, 0.0)
+    ps.reaction_forces(X, 0.0)
+
+
+def test_user_arrays_are_not_aliased():
+    """The system copies the positions it is given; later runs do not touch them."""
+    x = np.array([[0.0, 1.0]])
+    ps = ParticleSystem(x, forces=[Gravity(g)])
+    ps.run(1.0, 0.1)
+    assert x.tolist() == [[0.0, 1.0]]
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(x=[1.0, 2.0]), "x must have 2 dimensions"),
+        (dict(x=[[1.0, 2.0, 3.0, 4.0]]), r"x must have shape \(n, 2\) or \(n, 3\)"),
+        (dict(x=[[np.nan, 0.0]]), "x must be finite"),
+        (dict(v=[[0.0, 0.0, 0.0]]), r"v must have shape \(1, 2\)"),
+        (dict(m=0.0), "m must be positive"),
+        (dict(m=[-1.0]), "m must be positive"),
+        (dict(m=[1.0, 2.0]), r"m must be a number or have shape \(1,\)"),
+        (dict(pinned=[3]), r"pinned indices must lie in \[0, 1\)"),
+        (dict(pinned=[0], v=[[1.0, 0.0]]), "v of pinned particles must be zero"),
+        (dict(pinned=[0.5]), "pinned must be a list of particle indices"),
+        (dict(forces=[lambda x: x]), "forces must be Force objects"),
+    ],
+)
+def test_bad_input(kwargs, match):
+    """Each mistake raises a ValueError naming the argument."""
+    args = dict(x=[[0.0, 0.0]])
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=match):
+        ParticleSystem(**args)
+
+
+def test_state_of_wrong_shape_is_rejected():
+    ps = ParticleSystem([[0.0, 0.0]])
+    with pytest.raises(ValueError, match=r"X must have shape \(1, 2, 2\)"):
+        ps.derivative(np.zeros((2, 2, 2)), 0.0)
+
+
+def test_unknown_method_in_run():
+    ps = ParticleSystem([[0.0, 0.0]])
+    with pytest.raises(ValueError, match="unknown method 'leapfrog'"):
+        ps.run(1.0, 0.1, method="leapfrog")
