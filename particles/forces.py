@@ -439,6 +439,10 @@ class LennardJones(Force):
     def skin(self):
         return self._list.skin
 
+    def reset(self):
+        """Forget the cached pair list (particles were added, removed or reordered)."""
+        self._list.reset()
+
     def magnitude(self, r):
         """``f(r) = k1 / r^m - k2 / r^n`` for distances `r` (no cutoff applied)."""
         r = np.asarray(r, dtype=float)

@@ -156,3 +156,68 @@ def test_unknown_method_in_run():
     ps = ParticleSystem([[0.0, 0.0]])
     with pytest.raises(ValueError, match="unknown method 'leapfrog'"):
         ps.run(1.0, 0.1, method="leapfrog")
+
+
+def test_add_particles_keeps_state_fortran_ordered_and_attributes_aligned():
+    """add_particles appends state, masses and attribute values; the state stays in Fortran order."""
+    ps = ParticleSystem([[0.0, 0.0], [1.0, 0.0]], m=[1.0, 2.0])
+    birth = ps.define_attribute("birth", fill=-1.0)
+    assert birth.tolist() == [-1.0, -1.0]
+    ps.define_attribute("rgb", fill=[1.0, 1.0, 1.0], shape=(3,))
+    new = ps.add_particles([[5.0, 5.0], [6.0, 6.0]], v=[[1.0, 0.0], [0.0, 1.0]], m=3.0, birth=[0.5, 0.7])
+    assert new.tolist() == [2, 3] and ps.n == 4
+    assert ps.X.flags.f_contiguous
+    np.testing.assert_array_equal(ps.m, [1.0, 2.0, 3.0, 3.0])
+    np.testing.assert_array_equal(ps.attributes["birth"], [-1.0, -1.0, 0.5, 0.7])
+    assert ps.attributes["rgb"].shape == (4, 3)
+    np.testing.assert_array_equal(ps.X[3], [[6.0, 6.0], [0.0, 1.0]])
+
+
+def test_remove_particles_remaps_pins_and_attributes():
+    """remove_particles drops rows everywhere and renumbers the pinned particles that remain."""
+    ps = ParticleSystem(np.arange(10.0).reshape(5, 2), m=[1.0, 2.0, 3.0, 4.0, 5.0], pinned=[1, 4])
+    ps.define_attribute("tag", fill=0, dtype=int)
+    ps.attributes["tag"][:] = [10, 11, 12, 13, 14]
+    keep = ps.remove_particles(np.array([True, True, False, False, False]))
+    assert keep.tolist() == [2, 3, 4] and ps.n == 3 and ps.X.flags.f_contiguous
+    assert ps.pinned.tolist() == [2]
+    np.testing.assert_array_equal(ps.m, [3.0, 4.0, 5.0])
+    np.testing.assert_array_equal(ps.attributes["tag"], [12, 13, 14])
+    ps.remove_particles([0])
+    np.testing.assert_array_equal(ps.X[:, 0, 0], [6.0, 8.0])
+    ps.remove_particles(np.ones(2, dtype=bool))
+    t, X = ps.run(0.1, 0.05)  # an empty system still runs
+    assert X.shape == (3, 0, 2, 2)
+
+
+def test_pair_forces_stay_right_when_particles_come_and_go():
+    """Lennard-Jones (with its cached pair list) gives the exact forces after removing and adding."""
+    from particles.forces import LennardJones
+
+    lj = LennardJones.from_epsilon_sigma(skin=0.5)
+    x = np.array([[0.0, 0.0], [1.1, 0.0], [5.0, 0.0]])
+    ps = ParticleSystem(x, forces=[lj])
+    ps.total_force(ps.X, 0.0)
+    ps.remove_particles([1])
+    ps.add_particles([[5.5, 0.0]])  # same count, other particles
+    F = ps.total_force(ps.X, 0.0)
+    np.testing.assert_allclose(F, lj(ps.X[:, 0]))
+    assert abs(F[1, 0]) > 0
+
+
+@pytest.mark.parametrize(
+    "call, match",
+    [
+        (lambda ps: ps.add_particles([[0.0, 0.0, 0.0]]), r"x must have shape \(any, 2\)"),
+        (lambda ps: ps.add_particles([[0.0, 0.0]], m=-1.0), "m must be positive"),
+        (lambda ps: ps.add_particles([[0.0, 0.0]], age=[1.0]), "unknown attributes \\['age'\\]"),
+        (lambda ps: ps.remove_particles([7]), r"which indices must lie in \[0, 1\)"),
+        (lambda ps: ps.remove_particles([True, False]), r"which as a boolean mask must have shape \(1,\)"),
+        (lambda ps: ps.define_attribute("", 0.0), "name must be a non-empty string"),
+    ],
+)
+def test_bad_population_changes(call, match):
+    """Adding or removing particles wrongly raises a ValueError naming the argument."""
+    ps = ParticleSystem([[0.0, 0.0]])
+    with pytest.raises(ValueError, match=match):
+        call(ps)
