@@ -1,9 +1,13 @@
 """Drawing and animating particles with Matplotlib, without a window.
 
-Particles are drawn as unshaded points on top of everything else (the
-lecture's "no z-buffer, rendered last"); a velocity gives a motion-blur
-segment ``(x, x + v dt)``. Animations embed in a notebook as HTML/JavaScript
-(:func:`to_html`) and save to GIF with Pillow (:func:`save_gif`).
+Particles are drawn as unshaded points on top of everything else: they only
+emit light and, as on the slide, do not take part in depth sorting ("rendered
+last with the z-buffer disabled"). A velocity gives a motion-blur segment
+``(x, x + v dt)``; springs of a mass-spring model are lines between index
+pairs; colour and transparency can change per particle (by age, see
+:class:`particles.effects.ColorRamp`). Everything works in 2D and 3D.
+Animations embed in a notebook as HTML/JavaScript (:func:`to_html`) and save
+to GIF with Pillow (:func:`save_gif`).
 """
 
 from io import BytesIO
@@ -12,9 +16,14 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib import animation
 from matplotlib.collections import LineCollection
+from matplotlib.colors import to_rgba
+from mpl_toolkits.mplot3d.art3d import Line3DCollection
 from PIL import Image
 
-__all__ = ["draw_particles", "animate", "save_gif", "to_html"]
+__all__ = ["draw_particles", "draw_springs", "animate", "animate_snapshots", "save_gif", "to_html", "GifWriter"]
+
+# Layers: static scenery, then springs, then blur, then the points on top.
+_Z_LINES, _Z_SPRINGS, _Z_BLUR, _Z_POINTS = 5, 8, 9, 10
 
 
 def _axes(d, ax=None, figsize=(5, 5)):
@@ -25,8 +34,49 @@ def _axes(d, ax=None, figsize=(5, 5)):
     return fig, ax
 
 
+def _lines(d, **style):
+    """An empty line collection for d dimensions."""
+    return Line3DCollection([], **style) if d == 3 else LineCollection([], **style)
+
+
+def _segments(x, springs):
+    """Spring segments ``(x_i, x_j)``, shape (p, 2, d)."""
+    return np.stack([x[springs[:, 0]], x[springs[:, 1]]], axis=1)
+
+
+def _blur_segments(x, v, blur):
+    return np.stack([x, x + blur * v], axis=1)
+
+
+def _check_springs(springs, n=None):
+    springs = np.asarray(springs)
+    if springs.size == 0:
+        return np.zeros((0, 2), dtype=int)
+    if springs.ndim != 2 or springs.shape[1] != 2 or not np.issubdtype(springs.dtype, np.integer):
+        raise ValueError(f"springs must be an integer array of index pairs, shape (p, 2), got shape {springs.shape}")
+    if n is not None and (springs.min() < 0 or springs.max() >= n):
+        raise ValueError(f"springs must index particles in [0, {n}), got indices up to {springs.max()}")
+    return springs
+
+
+def _fade(color, factor):
+    """Colours (one, or an (n, 4) array) with their alpha scaled by factor."""
+    rgba = np.array(color, dtype=float) if np.ndim(color) == 2 else np.array([to_rgba(color)])
+    rgba[:, 3] *= factor
+    return rgba
+
+
+def _set_points(points, x, d):
+    """Move a scatter's points (2D or 3D) to positions x, shape (n, d)."""
+    if d == 3:
+        # Matplotlib has no public setter for 3D scatter positions; its own examples set _offsets3d
+        points._offsets3d = tuple(np.ascontiguousarray(x[:, a]) for a in range(3))
+    else:
+        points.set_offsets(x)
+
+
 def draw_particles(ax, x, v=None, blur=None, color="tab:orange", size=8.0, alpha=1.0):
-    """Draw particles as points, with optional motion-blur segments.
+    """Draw particles as unshaded points on top, with optional motion-blur segments.
 
     Parameters
     ----------
@@ -38,32 +88,73 @@ def draw_particles(ax, x, v=None, blur=None, color="tab:orange", size=8.0, alpha
     blur : float, optional
         Exposure time of the motion blur, in seconds.
     color : color or ndarray, shape (n, 3) or (n, 4)
-    size : float
+        One colour, or one per particle (e.g. by age, with transparency).
+    size : float or ndarray, shape (n,)
         Marker area, in points^2.
     alpha : float or ndarray, shape (n,)
+        Opacity; ignored where `color` already has an alpha column.
 
     Returns
     -------
     list of artists
+        The blur segments (if any) and the points.
     """
     x = np.asarray(x, dtype=float)
+    d = x.shape[1]
     artists = []
+    per_particle = np.ndim(color) == 2
     if v is not None and blur is not None and len(x):
-        seg = np.stack([x, x + blur * np.asarray(v, dtype=float)], axis=1)
-        if x.shape[1] == 2:
-            lines = LineCollection(seg, colors=color, linewidths=1.0, alpha=0.6, zorder=9)
-            ax.add_collection(lines)
-            artists.append(lines)
-    style = dict(s=size, c=color, alpha=alpha, edgecolors="none", zorder=10)
-    if x.shape[1] == 3:
+        lines = _lines(d, colors=_fade(color, 0.6) if per_particle else color, linewidths=1.0,
+                       alpha=None if per_particle else 0.6, zorder=_Z_BLUR)
+        lines.set_segments(_blur_segments(x, np.asarray(v, dtype=float), blur))
+        ax.add_collection(lines)
+        artists.append(lines)
+    style = dict(s=size, c=color, edgecolors="none", zorder=_Z_POINTS)
+    if not (per_particle and np.shape(color)[1] == 4):
+        style["alpha"] = alpha
+    if d == 3:
         style["depthshade"] = False  # unshaded: particles only emit light
+        ax.computed_zorder = False  # drawn in zorder, i.e. on top, not depth-sorted
     artists.append(ax.scatter(*x.T, **style))
     return artists
 
 
+def draw_springs(ax, x, springs, color="0.35", linewidth=0.8, alpha=1.0):
+    """Draw the springs of a mass-spring model as straight lines between particles.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes (2D) or Axes3D
+    x : ndarray, shape (n, d)
+        Positions.
+    springs : ndarray of int, shape (p, 2)
+        Index pairs ``(i, j)``, one per spring.
+    color, linewidth, alpha
+        Line style.
+
+    Returns
+    -------
+    LineCollection or Line3DCollection
+    """
+    x = np.asarray(x, dtype=float)
+    springs = _check_springs(springs, len(x))
+    lines = _lines(x.shape[1], colors=color, linewidths=linewidth, alpha=alpha, zorder=_Z_SPRINGS)
+    lines.set_segments(_segments(x, springs))
+    ax.add_collection(lines)
+    return lines
+
+
+def _auto_limits(frames, d):
+    allx = np.concatenate([f for f in frames if len(f)] or [np.zeros((1, d))])
+    lo, hi = allx.min(axis=0), allx.max(axis=0)
+    pad = 0.05 * np.maximum(hi - lo, 1e-9)
+    return list(zip(lo - pad, hi + pad))
+
+
 def animate(frames, times=None, velocities=None, blur=None, limits=None, draw=None, interval=40,
-            title=None, figsize=(5, 5), color="tab:orange", size=8.0):
-    """Build an animation from recorded positions.
+            title=None, figsize=(5, 5), color="tab:orange", size=8.0, *, colors=None, sizes=None,
+            springs=None, lines=(), background=None, axis=True, view=None):
+    """Build an animation from recorded positions, in 2D or 3D.
 
     Parameters
     ----------
@@ -72,20 +163,35 @@ def animate(frames, times=None, velocities=None, blur=None, limits=None, draw=No
     times : sequence of float, optional
         Time of each frame, shown in the title.
     velocities : sequence of ndarray, each shape (n_k, d), optional
-        With `blur`, draws motion-blur segments ``(x, x + v blur)`` (2D).
+        With `blur`, draws motion-blur segments ``(x, x + v blur)``.
     blur : float, optional
         Exposure time of the motion blur, in seconds.
     limits : sequence of (lo, hi), optional
         Axis limits per dimension (default: all frames' bounding box).
     draw : callable, optional
         ``draw(ax, k)`` draws frame ``k`` itself on cleared axes (slower; for
-        anything beyond points and blur).
+        anything beyond points, blur, springs and lines).
     interval : int
         Milliseconds between frames.
     title : str, optional
     figsize : tuple
     color, size
-        Point colour and area (points^2).
+        Point colour and area (points^2) when `colors` and `sizes` are not given.
+    colors : sequence of ndarray, each shape (n_k, 4), optional
+        RGBA per particle and frame (colour and transparency by age).
+    sizes : sequence of ndarray, each shape (n_k,), optional
+        Marker areas per particle and frame.
+    springs : ndarray of int, shape (p, 2), optional
+        Index pairs drawn as lines in every frame (mass-spring models; the
+        particles must keep their indices).
+    lines : sequence of ndarray, each shape (k, d)
+        Static polylines (walls, the ground), drawn under the particles.
+    background : color, optional
+        Figure and axes colour (dark for fire and fireworks).
+    axis : bool
+        Whether to show the axes.
+    view : (float, float), optional
+        3D only: elevation and azimuth of the camera, in degrees.
 
     Returns
     -------
@@ -94,51 +200,90 @@ def animate(frames, times=None, velocities=None, blur=None, limits=None, draw=No
     """
     frames = [np.asarray(f, dtype=float) for f in frames]
     d = frames[0].shape[1]
+    if springs is not None:
+        springs = _check_springs(springs, len(frames[0]))
     fig, ax = _axes(d, figsize=figsize)
     if limits is None:
-        allx = np.concatenate([f for f in frames if len(f)] or [np.zeros((1, d))])
-        lo, hi = allx.min(axis=0), allx.max(axis=0)
-        pad = 0.05 * np.maximum(hi - lo, 1e-9)
-        limits = list(zip(lo - pad, hi + pad))
+        limits = _auto_limits(frames, d)
+    ink = "black"
+    if background is not None:
+        fig.set_facecolor(background)
+        ax.set_facecolor(background)
+        if np.dot(to_rgba(background)[:3], [0.299, 0.587, 0.114]) < 0.5:
+            ink = "white"
 
     def setup():
-        for axis, (lo, hi) in zip("xyz", limits):
-            getattr(ax, f"set_{axis}lim")(lo, hi)
+        for name, (lo, hi) in zip("xyz", limits):
+            getattr(ax, f"set_{name}lim")(lo, hi)
         if d == 2:
             ax.set_aspect("equal")
+        else:
+            ax.computed_zorder = False
+            if view is not None:
+                ax.view_init(*view)
+        if not axis:
+            ax.set_axis_off()
+        for line in lines:
+            ax.plot(*np.asarray(line, dtype=float).T, color="0.5" if ink == "black" else "0.6", lw=1.5,
+                    zorder=_Z_LINES)
 
     def label(k):
         text = title or ""
         if times is not None:
             text = f"{text}  t = {times[k]:.2f} s".strip()
-        ax.set_title(text)
+        ax.set_title(text, color=ink)
 
-    if draw is not None or d == 3:
+    if draw is not None:
         def update(k):
             ax.clear()
             setup()
-            if draw is None:
-                draw_particles(ax, frames[k], color=color, size=size)
-            else:
-                draw(ax, k)
+            draw(ax, k)
             label(k)
             return []
-    else:  # 2D points (and blur): update the artists in place, much faster
+    else:  # update the artists in place: much faster than redrawing the axes
         setup()
-        points = ax.scatter([], [], s=size, c=color, edgecolors="none", zorder=10)
-        lines = LineCollection([], colors=color, linewidths=1.0, alpha=0.6, zorder=9)
-        ax.add_collection(lines)
+        style = dict(s=size, c=color, edgecolors="none", zorder=_Z_POINTS)
+        if d == 3:
+            style["depthshade"] = False  # unshaded: particles only emit light
+        points = ax.scatter(*np.zeros((d, 0)), **style)
+        blurs = _lines(d, colors=color, linewidths=1.0, alpha=0.6, zorder=_Z_BLUR)
+        ax.add_collection(blurs)
+        spring_lines = _lines(d, colors="0.35", linewidths=0.8, zorder=_Z_SPRINGS)
+        ax.add_collection(spring_lines)
 
         def update(k):
-            points.set_offsets(frames[k])
+            x = frames[k]
+            _set_points(points, x, d)
+            if colors is not None:
+                points.set_facecolor(colors[k])
+            if sizes is not None:
+                points.set_sizes(np.asarray(sizes[k], dtype=float))
+            elif d == 3:
+                points.set_sizes(np.full(len(x), float(size)))
             if velocities is not None and blur is not None:
-                lines.set_segments(np.stack([frames[k], frames[k] + blur * velocities[k]], axis=1))
+                blurs.set_segments(_blur_segments(x, velocities[k], blur))
+                if colors is not None:
+                    blurs.set_alpha(None)
+                    blurs.set_color(_fade(colors[k], 0.6))
+            if springs is not None:
+                spring_lines.set_segments(_segments(x, springs))
             label(k)
-            return [points, lines]
+            return [points, blurs, spring_lines]
 
     anim = animation.FuncAnimation(fig, update, frames=len(frames), interval=interval, blit=False)
     plt.close(fig)
     return anim
+
+
+def animate_snapshots(snapshots, blur=None, **options):
+    """Animate the snapshots of a :class:`particles.effects.ParticleEffect` run.
+
+    Colours, transparency and sizes come from the snapshots; `blur` draws
+    motion blur from their velocities; other options go to :func:`animate`.
+    """
+    return animate([s.x for s in snapshots], times=[s.t for s in snapshots],
+                   velocities=[s.v for s in snapshots], blur=blur,
+                   colors=[s.rgba for s in snapshots], sizes=[s.size for s in snapshots], **options)
 
 
 class GifWriter(animation.AbstractMovieWriter):

@@ -1,0 +1,345 @@
+"""Particle effects: a particle system whose particles are born, age and die.
+
+:class:`ParticleEffect` is Reeves' *particle system*: emitters create
+particles (:mod:`particles.emitters`), forces move them, every particle
+records its birth time and lifetime, its colour and transparency follow its
+age (:class:`ColorRamp`), and it is removed when it is older than its
+lifetime or, optionally, when it leaves given bounds. Effects form a tree:
+a child effect's :class:`particles.emitters.ParticleEmitter` can use the
+particles of its parent as emitters (Reeves' hierarchical systems, the
+Genesis effect; the sparks of a firework).
+
+One step of the whole tree, from ``t`` to ``t + h``:
+
+1. every effect moves its particles (one step of its ODE stepper, then
+   collisions, if any);
+2. parents first, every emitter adds the particles born during the step,
+   each advanced by the part of the step it has lived;
+3. every effect removes its dead particles.
+
+Births and deaths are array operations; no Python loop runs over particles.
+
+References
+----------
+.. [1] W. T. Reeves, "Particle Systems - a Technique for Modeling a Class of
+   Fuzzy Objects", ACM Transactions on Graphics 2(2), 91-108, 1983.
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._checks import as_float_array, positive_number
+from .collisions import Collider
+from .emitters import Emitter, ParticleEmitter
+from .integrators import step_times
+from .system import ParticleSystem
+
+__all__ = ["ColorRamp", "Snapshot", "ParticleEffect"]
+
+
+class ColorRamp:
+    """Colour and transparency as functions of age, by linear interpolation between stops.
+
+    Parameters
+    ----------
+    colors : sequence of colors
+        Matplotlib colours (names, hex strings, RGB tuples) spread evenly
+        over the relative age ``a = age / lifetime`` from 0 to 1.
+    alphas : sequence of float
+        Opacities in [0, 1], spread evenly over ``a`` the same way
+        (default: from opaque to fully transparent, old particles fade).
+    duration : float, optional
+        Measure age in units of `duration` seconds instead of each
+        particle's lifetime (for particles that live forever).
+
+    Examples
+    --------
+    >>> ramp = ColorRamp(["white", "red"], alphas=[1.0, 0.0])
+    >>> ramp(np.array([0.0, 0.5, 1.0])).tolist()
+    [[1.0, 1.0, 1.0, 1.0], [1.0, 0.5, 0.5, 0.5], [1.0, 0.0, 0.0, 0.0]]
+    """
+
+    def __init__(self, colors=("white",), alphas=(1.0, 0.0), duration=None):
+        from matplotlib.colors import to_rgb
+
+        try:
+            self.colors = np.array([to_rgb(c) for c in colors])
+        except (ValueError, TypeError):
+            raise ValueError(f"colors must be a list of Matplotlib colours, got {colors!r}") from None
+        self.alphas = as_float_array(alphas, "alphas", ndim=1)
+        if len(self.colors) == 0 or len(self.alphas) == 0:
+            raise ValueError("colors and alphas need at least one stop each")
+        if np.any((self.alphas < 0) | (self.alphas > 1)):
+            raise ValueError(f"alphas must lie in [0, 1], got {self.alphas.tolist()}")
+        self.duration = None if duration is None else positive_number(duration, "duration", "seconds")
+
+    def __call__(self, a):
+        """RGBA, shape (n, 4), for relative ages `a` (shape (n,), clipped to [0, 1])."""
+        a = np.clip(np.asarray(a, dtype=float), 0.0, 1.0)
+        rgba = np.empty((len(a), 4))
+        stops = np.linspace(0.0, 1.0, len(self.colors))
+        for c in range(3):  # a loop over the colour channels
+            rgba[:, c] = np.interp(a, stops, self.colors[:, c])
+        rgba[:, 3] = np.interp(a, np.linspace(0.0, 1.0, len(self.alphas)), self.alphas)
+        return rgba
+
+    def of(self, age, lifetime):
+        """RGBA for ages and lifetimes in seconds (shape (n,) each)."""
+        span = lifetime if self.duration is None else self.duration
+        a = np.divide(age, span, out=np.zeros(len(age)), where=np.isfinite(span) & (span > 0))
+        return self(a)
+
+
+@dataclass
+class Snapshot:
+    """The particles of an effect tree at one time, ready to draw.
+
+    Attributes
+    ----------
+    t : float
+        Time, in seconds.
+    x, v : ndarray, shape (n, d)
+        Positions and velocities of all live particles of the tree.
+    rgba : ndarray, shape (n, 4)
+        Colours with transparency, from each effect's ramp and the particles' tints.
+    size : ndarray, shape (n,)
+        Marker areas, in points^2.
+    age : ndarray, shape (n,)
+        Ages, in seconds.
+    counts : dict of str to int
+        Live particles per effect, by effect name.
+    """
+
+    t: float
+    x: np.ndarray
+    v: np.ndarray
+    rgba: np.ndarray
+    size: np.ndarray
+    age: np.ndarray
+    counts: dict = field(default_factory=dict)
+
+    def __len__(self):
+        return len(self.x)
+
+
+class ParticleEffect:
+    """A particle system with emitters, lifetimes, colours by age, and child effects.
+
+    Parameters
+    ----------
+    d : int
+        Dimension of space, 2 or 3.
+    emitters : sequence of Emitter or ParticleEmitter
+        Where the particles come from (more can be added with :meth:`add_emitter`).
+    forces : sequence of Force
+        Forces on every particle (e.g. gravity, pointing up for smoke, and damping).
+    collider : Collider, optional
+        Collisions after each step (newborn particles are projected).
+    bounds : (array_like, array_like), optional
+        Box ``(lo, hi)``; particles leaving it are removed too.
+    color : ColorRamp, optional
+        Colour and transparency by age (default: white, fading out).
+    size : float
+        Marker area for drawing, in points^2.
+    method : str
+        ODE stepper (see :data:`particles.integrators.INTEGRATORS`).
+    seed : int or numpy.random.Generator, optional
+        Random numbers for all emitters of this effect.
+    name : str
+        Used in :attr:`Snapshot.counts`.
+    t : float
+        Start time, in seconds.
+
+    Attributes
+    ----------
+    system : ParticleSystem
+        The live particles; per-particle ``birth``, ``lifetime``, ``tint``
+        and ``emitter`` are in ``system.attributes``.
+    children : list of ParticleEffect
+
+    Examples
+    --------
+    >>> from particles.emitters import Point, Cone
+    >>> from particles.forces import Gravity
+    >>> tap = Emitter(100.0, Point([0.0, 0.0]), Cone([0.0, 1.0], 3.0, 0.5, angle=0.2), lifetime=0.495)
+    >>> fountain = ParticleEffect(2, [tap], forces=[Gravity([0.0, -9.81])], seed=0)
+    >>> frames = fountain.run(2.0, h=0.01, every=50)
+    >>> [len(s) for s in frames]     # the count settles at rate x lifetime, rounded down
+    [0, 50, 50, 50, 50]
+    """
+
+    def __init__(self, d, emitters=(), forces=(), collider=None, bounds=None, color=None, size=6.0,
+                 method="symplectic_euler", seed=None, name="effect", t=0.0):
+        if d not in (2, 3):
+            raise ValueError(f"d must be 2 or 3, got {d!r}")
+        self.system = ParticleSystem(np.zeros((0, d)), forces=forces, t=t)
+        for key, fill, shape in (("birth", 0.0, ()), ("lifetime", np.inf, ()), ("tint", 1.0, (3,))):
+            self.system.define_attribute(key, fill=fill, shape=shape)
+        self.system.define_attribute("emitter", fill=-1, dtype=np.int64)
+        if collider is not None and not isinstance(collider, Collider):
+            raise ValueError(f"collider must be a particles.collisions.Collider, got {type(collider).__name__}")
+        self.collider = collider
+        self.bounds = None
+        if bounds is not None:
+            lo, hi = (as_float_array(b, "bounds", shape=(d,)) for b in bounds)
+            if np.any(hi <= lo):
+                raise ValueError(f"bounds must be (lo, hi) with lo < hi, got {lo.tolist()} and {hi.tolist()}")
+            self.bounds = (lo, hi)
+        self.color = ColorRamp() if color is None else color
+        if not isinstance(self.color, ColorRamp):
+            raise ValueError(f"color must be a ColorRamp, got {type(self.color).__name__}")
+        self.size = positive_number(size, "size", "points^2")
+        self.method = method
+        self.rng = np.random.default_rng(seed)
+        self.name = str(name)
+        self.emitters, self.children = [], []
+        for emitter in emitters:
+            self.add_emitter(emitter)
+
+    @property
+    def d(self):
+        return self.system.d
+
+    @property
+    def n(self):
+        """Number of live particles of this effect (not its children)."""
+        return self.system.n
+
+    @property
+    def t(self):
+        return self.system.t
+
+    def add_emitter(self, emitter):
+        """Add an Emitter or ParticleEmitter; returns it."""
+        if not isinstance(emitter, (Emitter, ParticleEmitter)):
+            raise ValueError(f"emitters must be Emitter or ParticleEmitter objects, got {type(emitter).__name__}")
+        if emitter.system.d != self.d if isinstance(emitter, ParticleEmitter) else emitter.d != self.d:
+            raise ValueError(f"the emitter lives in another dimension than this {self.d}D effect")
+        self.emitters.append(emitter)
+        return emitter
+
+    def add_child(self, effect):
+        """Make `effect` step after this one (its emitters may use this effect's particles); returns it."""
+        if not isinstance(effect, ParticleEffect) or effect is self:
+            raise ValueError("effect must be another ParticleEffect")
+        effect.system.t = self.t
+        self.children.append(effect)
+        return effect
+
+    def tree(self):
+        """This effect and all its descendants, parents before children."""
+        yield self
+        for child in self.children:  # a loop over child effects
+            yield from child.tree()
+
+    def age(self):
+        """Ages of the live particles, in seconds, shape (n,)."""
+        return self.t - self.system.attributes["birth"]
+
+    def colors(self):
+        """RGBA of the live particles, shape (n, 4): the ramp at their age, times their tint."""
+        a = self.system.attributes
+        rgba = self.color.of(self.age(), a["lifetime"])
+        rgba[:, :3] *= a["tint"]
+        return rgba
+
+    def step(self, h):
+        """Advance the whole tree by `h` seconds: move, emit (parents first), remove the dead."""
+        h = positive_number(h, "h", "seconds")
+        t0, t1 = self.t, self.t + h
+        effects = list(self.tree())
+        for effect in effects:  # a loop over effects
+            effect._move(t0, h)
+        for effect in effects:
+            effect._emit(t0, t1)
+        for effect in effects:
+            effect._cull(t1)
+
+    def _move(self, t0, h):
+        system = self.system
+        if system.n == 0:
+            system.t = t0 + h
+            return
+        X_old = system.X.copy(order="K")
+        system.step(h, method=self.method)
+        if self.collider is not None:
+            X, _ = self.collider.collide(X_old, system.X, t0, h, m=system.m)
+            system.X = np.asfortranarray(X)
+
+    def _emit(self, t0, t1):
+        for k, emitter in enumerate(self.emitters):  # a loop over emitters
+            births = emitter.emit(t0, t1, self.rng)
+            if not len(births):
+                continue
+            x, v = self._advance_newborn(births, t1)
+            self.system.add_particles(x, v, m=births.m, birth=births.t, lifetime=births.lifetime,
+                                      tint=1.0 if births.tint is None else births.tint, emitter=k)
+
+    def _advance_newborn(self, births, t1):
+        """Move newborns over the part of the step they have lived, tau = t1 - t_birth.
+
+        ``x + v tau + a tau^2 / 2`` with the acceleration ``a = F / m`` at
+        birth (interactions with other particles are left to the next step).
+        """
+        tau = (t1 - births.t)[:, None]
+        F = np.zeros_like(births.x)
+        for force in self.system.forces:  # a loop over forces
+            force.add_to(F, births.x, births.v, t1, births.m)
+        a = F / births.m[:, None]
+        x = births.x + births.v * tau + 0.5 * a * tau**2
+        v = births.v + a * tau
+        if self.collider is not None:
+            x, v, _ = self.collider.resolve(x, v, births.m, t=t1)
+        return x, v
+
+    def _cull(self, t1):
+        a = self.system.attributes
+        dead = t1 - a["birth"] > a["lifetime"]
+        if self.bounds is not None:
+            x = self.system.X[:, 0]
+            dead |= np.any((x < self.bounds[0]) | (x > self.bounds[1]), axis=1)
+        if dead.any():
+            self.system.remove_particles(dead)
+
+    def snapshot(self):
+        """The live particles of the whole tree now, as a :class:`Snapshot`."""
+        effects = list(self.tree())
+        X = [e.system.X for e in effects]
+        return Snapshot(
+            t=self.t,
+            x=np.concatenate([Xk[:, 0] for Xk in X]),
+            v=np.concatenate([Xk[:, 1] for Xk in X]),
+            rgba=np.concatenate([e.colors() for e in effects]),
+            size=np.concatenate([np.full(e.n, e.size) for e in effects]),
+            age=np.concatenate([e.age() for e in effects]),
+            counts={e.name: e.n for e in effects},
+        )
+
+    def run(self, t_end, h, every=1):
+        """Step the tree to `t_end` and record snapshots.
+
+        Parameters
+        ----------
+        t_end : float
+            End time, in seconds.
+        h : float
+            Time step, in seconds (the last one is shortened to land on `t_end`).
+        every : int
+            Record every `every`-th step (the first and last are always recorded).
+
+        Returns
+        -------
+        list of Snapshot
+        """
+        if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
+            raise ValueError(f"every must be a positive integer, got {every!r}")
+        times = step_times(self.t, t_end, h)
+        frames = [self.snapshot()]
+        for k in range(1, len(times)):  # a loop over time steps
+            self.step(times[k] - times[k - 1])
+            for effect in self.tree():
+                effect.system.t = float(times[k])  # no round-off drift from summing steps
+            if k % every == 0 or k == len(times) - 1:
+                frames.append(self.snapshot())
+        return frames
