@@ -51,7 +51,7 @@ def polarization(v):
     Examples
     --------
     >>> polarization([[1.0, 0.0], [2.0, 0.0], [-1.0, 0.0], [0.0, 3.0]])
-    0.5590169943749475
+    0.3535533905932738
     """
     v = as_float_array(v, "v", ndim=2)
     speed = np.linalg.norm(v, axis=1)
