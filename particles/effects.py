@@ -29,10 +29,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._checks import as_float_array, positive_number
+from ._checks import as_float_array, method_name, positive_number
 from .collisions import Collider
-from .emitters import Emitter, ParticleEmitter
-from .integrators import step_times
+from .emitters import LIFE_TOL, Emitter, ParticleEmitter
+from .errors import SimulationDiverged
+from .integrators import INTEGRATORS, step_times
 from .system import ParticleSystem
 
 __all__ = ["ColorRamp", "Snapshot", "ParticleEffect"]
@@ -162,10 +163,10 @@ class ParticleEffect:
     --------
     >>> from particles.emitters import Point, Cone
     >>> from particles.forces import Gravity
-    >>> tap = Emitter(100.0, Point([0.0, 0.0]), Cone([0.0, 1.0], 3.0, 0.5, angle=0.2), lifetime=0.495)
+    >>> tap = Emitter(100.0, Point([0.0, 0.0]), Cone([0.0, 1.0], 3.0, 0.5, angle=0.2), lifetime=0.5)
     >>> fountain = ParticleEffect(2, [tap], forces=[Gravity([0.0, -9.81])], seed=0)
     >>> frames = fountain.run(2.0, h=0.01, every=50)
-    >>> [len(s) for s in frames]     # the count settles at rate x lifetime, rounded down
+    >>> [len(s) for s in frames]     # the count settles at rate x lifetime
     [0, 50, 50, 50, 50]
     """
 
@@ -191,6 +192,7 @@ class ParticleEffect:
             raise ValueError(f"color must be a ColorRamp, got {type(self.color).__name__}")
         self.size = positive_number(size, "size", "points^2")
         self.method = method
+        self._step = method_name(method, INTEGRATORS)
         self.rng = np.random.default_rng(seed)
         self.name = str(name)
         self.emitters, self.children = [], []
@@ -261,8 +263,12 @@ class ParticleEffect:
         if system.n == 0:
             system.t = t0 + h
             return
-        X_old = system.X.copy(order="K")
-        system.step(h, method=self.method)
+        X_old = system.X
+        with np.errstate(over="ignore", invalid="ignore"):
+            X = self._step(system.derivative, X_old, t0, h)
+        if not np.all(np.isfinite(X)):
+            raise SimulationDiverged(0, t0, h, str(self.method), f"(in the effect {self.name!r})")
+        system.X, system.t = np.asfortranarray(X), t0 + h
         if self.collider is not None:
             X, _ = self.collider.collide(X_old, system.X, t0, h, m=system.m)
             system.X = np.asfortranarray(X)
@@ -295,7 +301,7 @@ class ParticleEffect:
 
     def _cull(self, t1):
         a = self.system.attributes
-        dead = t1 - a["birth"] > a["lifetime"]
+        dead = t1 - a["birth"] >= a["lifetime"] - LIFE_TOL  # a particle lives [birth, birth + lifetime)
         if self.bounds is not None:
             x = self.system.X[:, 0]
             dead |= np.any((x < self.bounds[0]) | (x > self.bounds[1]), axis=1)

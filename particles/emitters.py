@@ -45,6 +45,8 @@ __all__ = ["Point", "Disk", "SphereSurface", "Cone", "Births", "Emitter", "Parti
 
 # Counts are floor(phase + _COUNT_TOL): absorbs round-off in t (0.1 + 0.2 != 0.3).
 _COUNT_TOL = 1e-9
+# A particle is dead once its age is within LIFE_TOL seconds of its lifetime (round-off in t).
+LIFE_TOL = 1e-9
 _ids = itertools.count()
 
 
@@ -536,7 +538,7 @@ class ParticleEmitter(_Source):
             due = np.floor(self.rate * (np.minimum(t1, dies) - born) + _COUNT_TOL)
             n = np.maximum(due.astype(np.int64) - done, 0) * (born <= t1)
         else:
-            n = np.where((dies > t0) & (dies <= t1) & (done == 0), 1, 0)
+            n = np.where((dies <= t1 + LIFE_TOL) & (done == 0), 1, 0)  # dies now: culled after this step
         parent = np.repeat(np.arange(len(n)), n)
         k = np.arange(len(parent)) - np.repeat(np.cumsum(n) - n, n)  # 0, 1, ... within each parent
         done += n
