@@ -47,7 +47,7 @@ import numpy as np
 
 from ._checks import as_float_array, nonnegative_number, positive_number
 from .integrators import step_times
-from .crossing import first_crossing, hermite, path_speed
+from .crossing import first_crossing, hermite, hermite_coefficients, path_speed
 from .surfaces import Box, Complement, Intersection, Plane, Sphere, Surface, Union
 
 __all__ = [
@@ -324,8 +324,14 @@ class Collider:
         a = (v1 - v0) / h  # mean acceleration of the step, used for the rest of it
         found = []
         for _ in range(self.max_bounces if len(idx) else 0):  # a loop over successive bounces within the step
-            s, s_in = first_crossing(self.surface, lambda k, s: hermite(x0[k], v0[k], x1[k], v1[k], dt[k], s)[0],
-                                     len(idx), samples=self.samples, speed=path_speed(x0, v0, x1, v1, dt))
+            c = hermite_coefficients(x0, v0, x1, v1, dt)
+
+            def path(k, s):  # the Hermite path in Horner form
+                s = s[:, None]
+                return c[0, k] + s * (c[1, k] + s * (c[2, k] + s * c[3, k]))
+
+            s, s_in = first_crossing(self.surface, path, len(idx), samples=self.samples,
+                                     speed=path_speed(x0, v0, x1, v1, dt))
             hit = np.flatnonzero(s < 1.0)
             if not len(hit):
                 break

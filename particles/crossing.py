@@ -17,10 +17,12 @@ References
 
 import numpy as np
 
-__all__ = ["hermite", "path_speed", "first_crossing"]
+__all__ = ["hermite", "hermite_coefficients", "path_speed", "first_crossing"]
 
-# A crossing is accepted once the outside end of its bracket has H below this (metres).
+# A crossing is accepted once the outside end of its bracket has H below _CROSSING_TOL
+# and the inside end H above -_INSIDE_TOL (metres, for signed distances).
 _CROSSING_TOL = 1e-12
+_INSIDE_TOL = 1e-9
 
 
 def hermite(x0, v0, x1, v1, h, s):
@@ -49,6 +51,22 @@ def hermite(x0, v0, x1, v1, h, s):
     x = (2 * s3 - 3 * s2 + 1) * x0 + (s3 - 2 * s2 + s) * h * v0 + (3 * s2 - 2 * s3) * x1 + (s3 - s2) * h * v1
     v = ((6 * s2 - 6 * s) * (x0 - x1)) / h + (3 * s2 - 4 * s + 1) * v0 + (3 * s2 - 2 * s) * v1
     return x, v
+
+
+def hermite_coefficients(x0, v0, x1, v1, h):
+    """Coefficients of the Hermite path as a cubic in s: ``x(s) = c0 + s (c1 + s (c2 + s c3))``.
+
+    ``c0 = x0``, ``c1 = h v0``, ``c2 = 3 (x1 - x0) - h (2 v0 + v1)``,
+    ``c3 = 2 (x0 - x1) + h (v0 + v1)``; evaluating in this (Horner) form is
+    cheaper than the four basis polynomials when a path is sampled many times.
+
+    Returns
+    -------
+    ndarray, shape (4, k, d)
+    """
+    h = np.asarray(h, dtype=float).reshape(-1, 1) if np.ndim(h) else h
+    c = x1 - x0
+    return np.stack([x0, h * v0, 3 * c - h * (2 * v0 + v1), -2 * c + h * (v0 + v1)])
 
 
 def path_speed(x0, v0, x1, v1, h):
@@ -97,11 +115,12 @@ def first_crossing(surface, path, n, samples=8, speed=None, iterations=60):
     s : ndarray, shape (n,)
         1 for paths that stay outside, 0 for paths that start inside.
         Otherwise the outside end of the final bracket: ``0 <= H <= 1e-12``
-        there and the bracket is narrower than ``1e-6`` (or than ``1e-13``).
+        there (or the bracket is narrower than ``1e-13``).
     s_in : ndarray, shape (n,)
         The inside end of the final bracket (1 for paths that stay
-        outside): the gradient there tells which face was crossed, even at
-        an edge or a corner where the gradient on the surface is ambiguous.
+        outside), with ``-1e-9 <= H < 0``: the gradient there tells which
+        face was crossed, even at an edge or a corner where the gradient on
+        the surface is ambiguous.
     """
     lo, H_lo = np.zeros(n), surface._H(path(np.arange(n), np.zeros(n)))
     start_inside = H_lo < 0
@@ -127,15 +146,16 @@ def first_crossing(surface, path, n, samples=8, speed=None, iterations=60):
     lo, H_lo, hi, H_hi = lo[idx], H_lo[idx], hi[idx], H_hi[idx]
     side = np.zeros(len(idx))  # Illinois: halve the value kept twice in a row
     for _ in range(iterations):  # a loop over root-finding iterations
-        # done when the outside end is on the surface and the inside end close to it
-        # (the inside end tells which face was crossed)
-        active = (hi - lo > 1e-13) & ((H_lo > _CROSSING_TOL) | (hi - lo > 1e-6))
+        # Done when the outside end is on the surface and the inside end just below it
+        # (the inside end tells which face was crossed).
+        active = (hi - lo > 1e-13) & ((H_lo > _CROSSING_TOL) | (H_hi < -_INSIDE_TOL))
         if not active.any():
             break
         a = np.flatnonzero(active)
-        falsi = (lo[a] * H_hi[a] - hi[a] * H_lo[a]) / (H_hi[a] - H_lo[a])
-        # regula falsi stalls once H_lo is ~0: bisect then
-        sm = np.clip(np.where(H_lo[a] > _CROSSING_TOL, falsi, 0.5 * (lo[a] + hi[a])), lo[a], hi[a])
+        # Regula falsi aims at H = 0; once the outside end is there, at a point just inside.
+        level = np.where(H_lo[a] > _CROSSING_TOL, 0.0, -0.1 * _INSIDE_TOL)
+        sm = lo[a] + (level - H_lo[a]) * (hi[a] - lo[a]) / (H_hi[a] - H_lo[a])
+        sm = np.clip(sm, lo[a], hi[a])
         Hm = surface._H(path(idx[a], sm))
         inside = Hm < 0
         ai, ao = a[inside], a[~inside]

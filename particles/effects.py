@@ -85,11 +85,15 @@ class ColorRamp:
         rgba[:, 3] = np.interp(a, np.linspace(0.0, 1.0, len(self.alphas)), self.alphas)
         return rgba
 
+    def relative(self, age, lifetime):
+        """Relative ages in [0, 1] from ages and lifetimes in seconds (shape (n,) each)."""
+        span = np.broadcast_to(lifetime if self.duration is None else self.duration, np.shape(age))
+        a = np.divide(age, span, out=np.zeros(len(age)), where=np.isfinite(span) & (span > 0))
+        return np.clip(a, 0.0, 1.0)
+
     def of(self, age, lifetime):
         """RGBA for ages and lifetimes in seconds (shape (n,) each)."""
-        span = lifetime if self.duration is None else self.duration
-        a = np.divide(age, span, out=np.zeros(len(age)), where=np.isfinite(span) & (span > 0))
-        return self(a)
+        return self(self.relative(age, lifetime))
 
 
 @dataclass
@@ -141,8 +145,9 @@ class ParticleEffect:
         Box ``(lo, hi)``; particles leaving it are removed too.
     color : ColorRamp, optional
         Colour and transparency by age (default: white, fading out).
-    size : float
-        Marker area for drawing, in points^2.
+    size : float or (float, float)
+        Marker area for drawing, in points^2; a pair ``(start, end)`` grows
+        (or shrinks) it linearly over the relative age (smoke puffs spread).
     method : str
         ODE stepper (see :data:`particles.integrators.INTEGRATORS`).
     seed : int or numpy.random.Generator, optional
@@ -190,7 +195,10 @@ class ParticleEffect:
         self.color = ColorRamp() if color is None else color
         if not isinstance(self.color, ColorRamp):
             raise ValueError(f"color must be a ColorRamp, got {type(self.color).__name__}")
-        self.size = positive_number(size, "size", "points^2")
+        sizes = np.atleast_1d(as_float_array(size, "size", ndim=(0, 1)))
+        if sizes.shape not in ((1,), (2,)) or np.any(sizes <= 0):
+            raise ValueError(f"size must be a positive number or a pair (start, end) in points^2, got {size!r}")
+        self.size = sizes if len(sizes) == 2 else np.repeat(sizes, 2)
         self.method = method
         self._step = method_name(method, INTEGRATORS)
         self.rng = np.random.default_rng(seed)
@@ -239,12 +247,19 @@ class ParticleEffect:
         """Ages of the live particles, in seconds, shape (n,)."""
         return self.t - self.system.attributes["birth"]
 
+    def relative_age(self):
+        """Age over lifetime (or over the ramp's duration), clipped to [0, 1], shape (n,)."""
+        return self.color.relative(self.age(), self.system.attributes["lifetime"])
+
     def colors(self):
         """RGBA of the live particles, shape (n, 4): the ramp at their age, times their tint."""
-        a = self.system.attributes
-        rgba = self.color.of(self.age(), a["lifetime"])
-        rgba[:, :3] *= a["tint"]
+        rgba = self.color(self.relative_age())
+        rgba[:, :3] *= self.system.attributes["tint"]
         return rgba
+
+    def sizes(self):
+        """Marker areas of the live particles, in points^2, shape (n,)."""
+        return self.size[0] + (self.size[1] - self.size[0]) * self.relative_age()
 
     def step(self, h):
         """Advance the whole tree by `h` seconds: move, emit (parents first), remove the dead."""
@@ -317,7 +332,7 @@ class ParticleEffect:
             x=np.concatenate([Xk[:, 0] for Xk in X]),
             v=np.concatenate([Xk[:, 1] for Xk in X]),
             rgba=np.concatenate([e.colors() for e in effects]),
-            size=np.concatenate([np.full(e.n, e.size) for e in effects]),
+            size=np.concatenate([e.sizes() for e in effects]),
             age=np.concatenate([e.age() for e in effects]),
             counts={e.name: e.n for e in effects},
         )

@@ -219,19 +219,24 @@ def animate(frames, times=None, velocities=None, blur=None, limits=None, draw=No
             ax.set_aspect("equal")
         else:
             ax.computed_zorder = False
+            ax.set_box_aspect([hi - lo for lo, hi in limits], zoom=1.0 if axis else 1.3)  # equal scales
             if view is not None:
                 ax.view_init(*view)
         if not axis:
             ax.set_axis_off()
+            ax.set_position([0.0, 0.0, 1.0, 0.92])  # no room needed for ticks
         for line in lines:
-            ax.plot(*np.asarray(line, dtype=float).T, color="0.5" if ink == "black" else "0.6", lw=1.5,
-                    zorder=_Z_LINES)
+            ax.plot(*np.asarray(line, dtype=float).T, color="0.5" if ink == "black" else "0.35",
+                    lw=1.5 if ink == "black" else 0.8, zorder=_Z_LINES)
+
+    # A figure text, not the axes title: placing a title costs more than drawing the frame.
+    caption = fig.text(0.5, 0.97, "", ha="center", va="top", color=ink)
 
     def label(k):
         text = title or ""
         if times is not None:
             text = f"{text}  t = {times[k]:.2f} s".strip()
-        ax.set_title(text, color=ink)
+        caption.set_text(text)
 
     if draw is not None:
         def update(k):

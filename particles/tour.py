@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import forces, render, studies
+from . import bounce_study, demos, forces, render, studies
 from .neighbors import all_pairs, cell_pairs
 from .system import ParticleSystem
 
@@ -111,6 +111,27 @@ def run_tour(out="out", log=print):
             f"{r['all_s'] / r['cells_s']:>7.1f}")
     _write_csv(out / "lennard_jones_costs.csv", rows)
     written.append(out / "lennard_jones_costs.csv")
+
+    log("\n4. Collisions: a dropped ball, backtracking vs projection (verlet, h = 0.01 s)")
+    study = bounce_study.bounce_study()
+    log(bounce_study.format_bounce_table(study))
+    fig = bounce_study.plot_bounce_study(study)
+    fig.savefig(out / "bounces.png", dpi=120)
+    written.append(out / "bounces.png")
+    plt.close(fig)
+    _write_csv(out / "bounces.csv", [
+        {"method": m, "restitution": e, "bounce": k, "height": hk}
+        for (m, e), heights in study["heights"].items() for k, hk in enumerate(heights)
+    ])
+    written.append(out / "bounces.csv")
+
+    log("\n5. Particle effects: emitters, lifetimes, collisions, hierarchies, flocks")
+    for name in demos.DEMOS:  # a loop over the registered demos
+        t0 = time.perf_counter()
+        data, paths = demos.write_demo(name, out)
+        info = ", ".join(f"{k} {v}" for k, v in data.info.items())
+        log(f"   {name:<10} {len(data):>4} frames  {info}  ({time.perf_counter() - t0:.1f} s)")
+        written.extend(paths)
 
     log(f"\nWrote {len(written)} files to {out}/ in {time.perf_counter() - start:.1f} s:")
     for path in written:
