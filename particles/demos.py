@@ -139,7 +139,7 @@ def _from_effect(effect, name, title, seconds, fps, steps_per_frame, **options):
 
 
 @register("fountain", "3D: water from a nozzle, splashing on the ground (collisions, lifetimes)")
-def fountain(seconds=3.5, fps=15, seed=0):
+def fountain(seconds=4.0, fps=12, seed=0):
     nozzle = Emitter(250.0, Disk([0.0, 0.0, 0.05], 0.04), Cone([0, 0, 1], 4.4, 0.3, angle=0.3),
                      lifetime=(2.4, 0.4))
     ground = Collider(Plane([0, 0, 0], [0, 0, 1]), restitution=0.3, friction=0.6)
@@ -240,7 +240,7 @@ def flock(seconds=8.0, fps=10, seed=0):
 
 
 @register("genesis", "3D: Reeves' Genesis effect, an expanding ring of secondary systems over a planet")
-def genesis(seconds=3.5, fps=15, seed=0):
+def genesis(seconds=3.6, fps=15, seed=0):
     planet = np.zeros(3)
     ring = SphereSurface(planet, 1.0, polar=lambda t: (0.6 * t, 0.6 * t + 0.12))
     systems = ParticleEffect(3, [Emitter(120.0, ring, lifetime=(0.7, 0.2))], size=2.0, seed=seed,

@@ -419,7 +419,7 @@ class Emitter(_Source):
 
     def reset(self):
         """Forget what was emitted: counting restarts at `start`."""
-        self.count, self.t_last, self.phase = 0, self.start, 0.0
+        self.count, self.t_last, self.phase, self._seen = 0, self.start, 0.0, self.start
 
     def emit(self, t0, t1, rng):
         """The particles born in the step ``(t0, t1]``; positions and velocities at birth.
@@ -435,6 +435,12 @@ class Emitter(_Source):
         Births
         """
         a, b = max(t0, self.start), min(t1, self.stop)
+        if a > self._seen:  # time not covered by any step (a simulation starting after `start`)
+            self.phase += self.rate * (min(a, self.stop) - self._seen)  # at the mean rate, nobody born
+            skipped = self.rate * (min(a, self.stop) - self.start) if not self.rate_spread else self.phase
+            self.count = max(self.count, int(np.floor(skipped + _COUNT_TOL)))
+            self.t_last = self.start + self.count / self.rate if self.rate else self.start
+        self._seen = max(self._seen, b)
         if b <= a or self.rate == 0:
             return self._births(rng, np.zeros(0), np.zeros((0, self.d)), None, None)
         if not self.carry:  # the slide's rule, for comparison

@@ -1,12 +1,14 @@
 """The command line: the tour writes its figures, animation and tables."""
 
 import csv
+import inspect
 import subprocess
 import sys
 
 from PIL import Image
 
 from particles.cli import main
+from particles.demos import DEMOS
 from particles.tour import force_field_scene, lennard_jones_costs
 
 
@@ -21,6 +23,12 @@ def test_tour_writes_files_and_prints_table(tmp_path, capsys):
         assert gif.n_frames == len(force_field_scene()[0])
     rows = list(csv.DictReader(open(tmp_path / "convergence.csv")))
     assert {r["method"] for r in rows} >= {"euler", "rk4", "verlet", "implicit_euler"}
+    assert (tmp_path / "bounces.png").stat().st_size > 0
+    assert "backtrack  1.00       20" in out
+    for name, demo in DEMOS.items():  # the effects: one GIF per demo, full length
+        defaults = inspect.signature(demo.function).parameters
+        with Image.open(tmp_path / f"{name}.gif") as gif:
+            assert gif.n_frames == round(defaults["seconds"].default * defaults["fps"].default) + 1, name
 
 
 def test_force_field_scene_stays_bounded():
@@ -38,7 +46,7 @@ def test_lennard_jones_costs_rows():
 
 def test_console_script_help():
     result = subprocess.run([sys.executable, "-m", "particles", "--help"], capture_output=True, text=True)
-    assert result.returncode == 0 and "tour" in result.stdout
+    assert result.returncode == 0 and "tour" in result.stdout and "demo" in result.stdout
 
 
 def test_unknown_command_fails_cleanly():

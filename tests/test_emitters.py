@@ -33,6 +33,14 @@ def test_counts_are_exact_over_irregular_steps(rate):
     assert emitter.t_last == pytest.approx(emitter.count / rate)
 
 
+def test_an_emitter_that_started_earlier_makes_nobody_before_the_first_step():
+    """start < t0: counting goes on from start, but only particles born after t0 are created."""
+    emitter = Emitter(10.0, Point([0.0, 0.0]), start=-1.05)
+    births = emitter.emit(0.0, 0.1, np.random.default_rng(0))
+    np.testing.assert_allclose(births.t, [0.05])
+    assert emitter.count == 11
+
+
 def test_the_slides_reset_rule_runs_slow():
     """Setting t_last = t loses the fractions: 10 particles/s in steps of 0.15 s gives 6.7/s."""
     exact, reset = Emitter(10.0, Point([0, 0])), Emitter(10.0, Point([0, 0]), carry=False)
