@@ -2,7 +2,11 @@
 
 The reference library follows the lecture's animation loop: a state ``X`` of
 shape ``(n, 2, d)`` (positions and velocities), forces that add into a force
-array, and ODE steppers ``step(f, X, t, h)``.
+array, and ODE steppers ``step(f, X, t, h)``. On top of it: collisions with
+implicit surfaces (:mod:`particles.collisions`), emitters and particle
+effects with lifetimes (:mod:`particles.emitters`, :mod:`particles.effects`),
+flocks (:mod:`particles.flocking`) and drawing (:mod:`particles.render`,
+imported on demand because it loads Matplotlib's pyplot).
 
 >>> import particles
 >>> from particles.forces import Gravity, Damping
@@ -10,8 +14,11 @@ array, and ODE steppers ``step(f, X, t, h)``.
 >>> t, X = ps.run(0.5, h=0.01, method="verlet")
 """
 
-from . import forces, integrators, neighbors
+from . import collisions, effects, emitters, flocking, forces, integrators, neighbors, surfaces
+from .collisions import Collider
+from .effects import ParticleEffect
 from .errors import ConvergenceError, SimulationDiverged
+from .flocking import Flock
 from .integrators import INTEGRATORS, integrate
 from .system import ParticleSystem
 
@@ -23,7 +30,15 @@ __all__ = [
     "integrate",
     "SimulationDiverged",
     "ConvergenceError",
+    "Collider",
+    "ParticleEffect",
+    "Flock",
     "forces",
     "integrators",
     "neighbors",
+    "surfaces",
+    "collisions",
+    "emitters",
+    "effects",
+    "flocking",
 ]
