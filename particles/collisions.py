@@ -323,28 +323,30 @@ class Collider:
         t0, dt = np.full(len(idx), t), np.full(len(idx), h)
         a = (v1 - v0) / h  # mean acceleration of the step, used for the rest of it
         found = []
-        for _ in range(self.max_bounces if len(idx) else 0):  # a loop over successive bounces within the step
-            c = hermite_coefficients(x0, v0, x1, v1, dt)
+        todo = np.arange(len(idx))  # paths that may still cross: all, then those that just bounced
+        for _ in range(self.max_bounces):  # a loop over successive bounces within the step
+            if not len(todo):
+                break
+            c = hermite_coefficients(x0[todo], v0[todo], x1[todo], v1[todo], dt[todo])
 
             def path(k, s):  # the Hermite path in Horner form
                 s = s[:, None]
                 return c[0, k] + s * (c[1, k] + s * (c[2, k] + s * c[3, k]))
 
-            s, s_in = first_crossing(self.surface, path, len(idx), samples=self.samples,
-                                     speed=path_speed(x0, v0, x1, v1, dt))
-            hit = np.flatnonzero(s < 1.0)
-            if not len(hit):
-                break
-            xc, vc = hermite(x0[hit], v0[hit], x1[hit], v1[hit], dt[hit], s[hit])
-            x_in, _ = hermite(x0[hit], v0[hit], x1[hit], v1[hit], dt[hit], s_in[hit])
-            n = self.surface.normal(x_in)  # the face crossed, unambiguous even at corners
+            s, s_in = first_crossing(self.surface, path, len(todo), samples=self.samples,
+                                     speed=path_speed(x0[todo], v0[todo], x1[todo], v1[todo], dt[todo]))
+            crossed = s < 1.0
+            hit, s, s_in = todo[crossed], s[crossed], s_in[crossed]
+            xc, vc = hermite(x0[hit], v0[hit], x1[hit], v1[hit], dt[hit], s)
+            x_in, _ = hermite(x0[hit], v0[hit], x1[hit], v1[hit], dt[hit], s_in)
+            n = self.surface.normal(x_in) if len(hit) else xc  # the face crossed, unambiguous at corners
             v_new, dv_n, dv_t = _respond(vc, n, self.restitution, self.friction)
-            rest = (1.0 - s[hit]) * dt[hit]
+            rest = (1.0 - s) * dt[hit]
             ah = a[hit].copy()
             a_n = np.einsum("ij,ij->i", ah, n)
             resting = (a_n < 0) & (np.einsum("ij,ij->i", v_new, n) < -a_n * rest)
             ah[resting] -= a_n[resting, None] * n[resting]  # the surface carries the inward pull
-            tc = t0[hit] + s[hit] * dt[hit]
+            tc = t0[hit] + s * dt[hit]
             mi = m[idx[hit], None]
             found.append(Contacts(idx[hit], tc, xc, n, mi * dv_n, mi * dv_t))
             # the rest of the step: constant acceleration from the contact state
@@ -352,6 +354,7 @@ class Collider:
             x1[hit] = xc + v_new * rest[:, None] + 0.5 * ah * rest[:, None] ** 2
             v1[hit] = v_new + ah * rest[:, None]
             t0[hit], dt[hit] = tc, np.maximum(rest, 1e-300)
+            todo = hit
         X[idx, 0], X[idx, 1] = x1, v1
         x, v, projected = self._project(X[:, 0], X[:, 1], m, free, t + h)
         X[:, 0], X[:, 1] = x, v
