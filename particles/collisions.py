@@ -49,6 +49,7 @@ from ._checks import as_float_array, nonnegative_number, positive_number
 from .integrators import step_times
 from .crossing import first_crossing, hermite, hermite_coefficients, path_speed
 from .surfaces import Box, Complement, Intersection, Plane, Sphere, Surface, Union
+from .system import _pinned_indices
 
 __all__ = [
     "Plane", "Sphere", "Box", "Union", "Intersection", "Complement", "Surface",
@@ -232,10 +233,9 @@ class Collider:
         return X
 
     def _free(self, n, pinned):
+        """Mask of the particles that collide: all but the pinned ones (indices or a mask)."""
         free = np.ones(n, dtype=bool)
-        pinned = np.asarray(pinned)
-        if pinned.size:
-            free[pinned] = False
+        free[_pinned_indices(pinned, n)] = False
         return free
 
     def resolve(self, x, v, m=1.0, pinned=(), t=0.0):

@@ -115,7 +115,7 @@ class Disk(Point):
         In metres, > 0.
     normal : array_like, shape (3,), optional
         3D only: the disk's axis (default ``(0, 0, 1)``), also its normal for
-        velocities along ``axis="normal"``.
+        velocities along ``axis="normal"`` (in 2D that normal is ``(0, 1)``, up).
     """
 
     def __init__(self, center, radius, normal=None):

@@ -233,11 +233,10 @@ class Emitter(_Source):
         x = self.shape.sample(rng, t_birth)
         axis = self.shape.normal(x, t_birth) if self.axis == "normal" else None
         v_base = None
-        if self.inherit and callable(self.shape.center) and n:
-            delta = 1e-5
-            v_base = self.inherit * (_at(self.shape.center, t_birth + delta) - _at(self.shape.center, t_birth - delta)) / (2 * delta)
+        if self.inherit and callable(self.shape.center) and n:  # the emitter's velocity, central differences
+            delta, c = 1e-5, self.shape.center
+            v_base = self.inherit * (_at(c, t_birth + delta) - _at(c, t_birth - delta)) / (2 * delta)
         return self._births(rng, t_birth, x, axis, v_base)
-
 
 
 class ParticleEmitter(_Source):
@@ -286,7 +285,7 @@ class ParticleEmitter(_Source):
         else:
             if count is None:
                 raise ValueError("count (particles per parent) is needed when when='death'")
-            self.count = _mean_spread(count, "count", "particles")
+            self.burst = _mean_spread(count, "count", "particles")  # (mean, spread) per parent
         self.system = getattr(source, "system", source)
         self.effect = source if hasattr(source, "system") else None
         if when == "death" and self.effect is None:
@@ -325,7 +324,7 @@ class ParticleEmitter(_Source):
             t_birth = born[parent] + (done[parent] - n[parent] + k + 1) / self.rate
         else:  # a burst: all at the death time, then a count per parent
             t_birth = dies[parent]
-            sizes = np.maximum(np.round(vary(rng, *self.count, len(parent))), 0).astype(np.int64)
+            sizes = np.maximum(np.round(vary(rng, *self.burst, len(parent))), 0).astype(np.int64)
             parent, t_birth = np.repeat(parent, sizes), np.repeat(t_birth, sizes)
         t_birth = np.clip(t_birth, t0, t1)
         x_p, v_p = self.system.X[parent, 0], self.system.X[parent, 1]

@@ -280,7 +280,8 @@ def test_pinned_particles_and_inputs_are_untouched():
 
 def test_resolve_projects_a_state():
     """resolve() moves particles inside onto the surface and reflects their velocities."""
-    x, v, contacts = Collider(Sphere([0, 0], 1.0), restitution=0.0).resolve([[0.5, 0.0], [2.0, 0.0]], [[-1.0, 1.0], [0, 0]])
+    collider = Collider(Sphere([0, 0], 1.0), restitution=0.0)
+    x, v, contacts = collider.resolve([[0.5, 0.0], [2.0, 0.0]], [[-1.0, 1.0], [0, 0]])
     np.testing.assert_allclose(x, [[1.0, 0.0], [2.0, 0.0]])
     np.testing.assert_allclose(v, [[0.0, 1.0], [0.0, 0.0]])
     assert contacts.index.tolist() == [0]
@@ -302,6 +303,8 @@ def test_resolve_projects_a_state():
          r"X_old must have shape \(n, 2, 2\)"),
         (lambda: Collider(Plane([0, 0], [0, 1])).collide(np.zeros((3, 2, 2)), np.zeros((3, 2, 2)), 0, 0.0),
          "h must be a positive finite number"),
+        (lambda: Collider(Plane([0, 0], [0, 1])).collide(np.zeros((3, 2, 2)), np.zeros((3, 2, 2)), 0, 0.1, pinned=[5]),
+         r"pinned indices must lie in \[0, 3\)"),
     ],
 )
 def test_bad_input(make, match):

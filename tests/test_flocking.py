@@ -139,7 +139,8 @@ def test_polarization_and_spread_values():
         (lambda: Boids(-1.0), "radius must be a positive"),
         (lambda: Boids(1.0, alignment=-1.0), "alignment must be a finite number >= 0"),
         (lambda: Boids(1.0, view_angle=4.0), r"view_angle must lie in \[0, pi\]"),
-        (lambda: Flock([[0.0, 0.0]], [[1.0, 0.0]], Boids(1.0), min_speed=2.0, max_speed=1.0), "max_speed must be >= min_speed"),
+        (lambda: Flock([[0.0, 0.0]], [[1.0, 0.0]], Boids(1.0), min_speed=2.0, max_speed=1.0),
+         "max_speed must be >= min_speed"),
         (lambda: Flock([[0.0, 0.0]], [[1.0, 0.0]], "boids"), "rules must be a Boids object"),
         (lambda: Containment([0.0, 0.0], [0.0, 1.0]), "hi must exceed lo"),
     ],
@@ -148,3 +149,12 @@ def test_bad_input(make, match):
     """Mistakes raise ValueError naming the argument."""
     with pytest.raises(ValueError, match=match):
         make()
+
+
+def test_inputs_are_not_modified():
+    """Steering and running a flock leave the caller's arrays as they were."""
+    x, v = random_flock(50, box=3.0)
+    x.setflags(write=False)
+    v.setflags(write=False)
+    Boids(1.0).accelerations(x, v)
+    Flock(x, 5 * v, Boids(1.0), max_speed=2.0).run(0.5, 0.05)
