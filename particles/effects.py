@@ -224,8 +224,9 @@ class ParticleEffect:
         """Add an Emitter or ParticleEmitter; returns it."""
         if not isinstance(emitter, (Emitter, ParticleEmitter)):
             raise ValueError(f"emitters must be Emitter or ParticleEmitter objects, got {type(emitter).__name__}")
-        if emitter.system.d != self.d if isinstance(emitter, ParticleEmitter) else emitter.d != self.d:
-            raise ValueError(f"the emitter lives in another dimension than this {self.d}D effect")
+        d = emitter.system.d if isinstance(emitter, ParticleEmitter) else emitter.d
+        if d != self.d:
+            raise ValueError(f"the emitter lives in another dimension ({d}D) than this {self.d}D effect")
         self.emitters.append(emitter)
         return emitter
 
