@@ -47,7 +47,7 @@ import numpy as np
 
 from ._checks import as_float_array, nonnegative_number, positive_number
 from .integrators import step_times
-from .crossing import first_crossing, hermite, hermite_coefficients, path_speed
+from .crossing import cubic_path, first_crossing, hermite, hermite_coefficients, path_speed
 from .surfaces import Box, Complement, Intersection, Plane, Sphere, Surface, Union
 from .system import _pinned_indices
 
@@ -328,12 +328,7 @@ class Collider:
             if not len(todo):
                 break
             c = hermite_coefficients(x0[todo], v0[todo], x1[todo], v1[todo], dt[todo])
-
-            def path(k, s):  # the Hermite path in Horner form
-                s = s[:, None]
-                return c[0, k] + s * (c[1, k] + s * (c[2, k] + s * c[3, k]))
-
-            s, s_in = first_crossing(self.surface, path, len(todo), samples=self.samples,
+            s, s_in = first_crossing(self.surface, lambda k, s: cubic_path(c, k, s), len(todo), samples=self.samples,
                                      speed=path_speed(x0[todo], v0[todo], x1[todo], v1[todo], dt[todo]))
             crossed = s < 1.0
             hit, s, s_in = todo[crossed], s[crossed], s_in[crossed]

@@ -17,7 +17,7 @@ References
 
 import numpy as np
 
-__all__ = ["hermite", "hermite_coefficients", "path_speed", "first_crossing"]
+__all__ = ["hermite", "hermite_coefficients", "cubic_path", "path_speed", "first_crossing"]
 
 # A crossing is accepted once the outside end of its bracket has H below _CROSSING_TOL
 # and the inside end H above -_INSIDE_TOL (metres, for signed distances).
@@ -25,12 +25,20 @@ _CROSSING_TOL = 1e-12
 _INSIDE_TOL = 1e-9
 
 
+def _steps(h, k):
+    """Step lengths as an array of shape (k,)."""
+    return np.broadcast_to(np.asarray(h, dtype=float), (k,))
+
+
 def hermite(x0, v0, x1, v1, h, s):
     """Position and velocity at fraction `s` of a step, from the step's end states.
 
     The cubic Hermite interpolant matches ``x`` and ``dx/dt = v`` at both ends
     of the step; it reproduces any path with constant acceleration exactly
-    (a parabola is a cubic) and is fourth-order accurate for smooth paths.
+    (a parabola is a cubic) and is fourth-order accurate for smooth paths::
+
+        x(s) = (2s^3 - 3s^2 + 1) x0 + (s^3 - 2s^2 + s) h v0 + (3s^2 - 2s^3) x1 + (s^3 - s^2) h v1
+        v(s) = dx/ds / h
 
     Parameters
     ----------
@@ -45,11 +53,16 @@ def hermite(x0, v0, x1, v1, h, s):
     -------
     x, v : ndarray, shape (k, d)
     """
-    s = np.asarray(s, dtype=float)[:, None]
-    h = np.asarray(h, dtype=float).reshape(-1, 1) if np.ndim(h) else h
+    s = np.asarray(s, dtype=float)
+    k, d = np.shape(x0)
+    h = _steps(h, k)
     s2, s3 = s * s, s * s * s
-    x = (2 * s3 - 3 * s2 + 1) * x0 + (s3 - 2 * s2 + s) * h * v0 + (3 * s2 - 2 * s3) * x1 + (s3 - s2) * h * v1
-    v = ((6 * s2 - 6 * s) * (x0 - x1)) / h + (3 * s2 - 4 * s + 1) * v0 + (3 * s2 - 2 * s) * v1
+    b0, b1, b2, b3 = 2 * s3 - 3 * s2 + 1, (s3 - 2 * s2 + s) * h, 3 * s2 - 2 * s3, (s3 - s2) * h
+    db0, db1, db3 = (6 * s2 - 6 * s) / h, 3 * s2 - 4 * s + 1, 3 * s2 - 2 * s
+    x, v = np.empty((k, d), order="F"), np.empty((k, d), order="F")
+    for a in range(d):  # a loop over the d coordinates (faster than broadcasting over rows)
+        x[:, a] = b0 * x0[:, a] + b1 * v0[:, a] + b2 * x1[:, a] + b3 * v1[:, a]
+        v[:, a] = db0 * (x0[:, a] - x1[:, a]) + db1 * v0[:, a] + db3 * v1[:, a]
     return x, v
 
 
@@ -57,16 +70,33 @@ def hermite_coefficients(x0, v0, x1, v1, h):
     """Coefficients of the Hermite path as a cubic in s: ``x(s) = c0 + s (c1 + s (c2 + s c3))``.
 
     ``c0 = x0``, ``c1 = h v0``, ``c2 = 3 (x1 - x0) - h (2 v0 + v1)``,
-    ``c3 = 2 (x0 - x1) + h (v0 + v1)``; evaluating in this (Horner) form is
-    cheaper than the four basis polynomials when a path is sampled many times.
+    ``c3 = 2 (x0 - x1) + h (v0 + v1)``; evaluating in this (Horner) form, see
+    :func:`cubic_path`, is cheaper than the four basis polynomials when a
+    path is sampled many times.
 
     Returns
     -------
-    ndarray, shape (4, k, d)
+    ndarray, shape (4, d, k)
+        Coordinate-major, so that each coordinate is one contiguous row.
     """
-    h = np.asarray(h, dtype=float).reshape(-1, 1) if np.ndim(h) else h
-    c = x1 - x0
-    return np.stack([x0, h * v0, 3 * c - h * (2 * v0 + v1), -2 * c + h * (v0 + v1)])
+    k, d = np.shape(x0)
+    h = _steps(h, k)
+    c = np.empty((4, d, k))
+    for a in range(d):  # a loop over the d coordinates
+        chord = x1[:, a] - x0[:, a]
+        c[0, a], c[1, a] = x0[:, a], h * v0[:, a]
+        c[2, a] = 3 * chord - h * (2 * v0[:, a] + v1[:, a])
+        c[3, a] = -2 * chord + h * (v0[:, a] + v1[:, a])
+    return c
+
+
+def cubic_path(c, idx, s):
+    """Positions ``c0 + s (c1 + s (c2 + s c3))`` of paths `idx` at parameters `s`, shape (len(idx), d)."""
+    x = np.empty((c.shape[1], len(idx)))
+    for a in range(len(x)):  # a loop over the d coordinates
+        c0, c1, c2, c3 = (np.take(c[j, a], idx) for j in range(4))
+        x[a] = c0 + s * (c1 + s * (c2 + s * c3))
+    return x.T
 
 
 def path_speed(x0, v0, x1, v1, h):
@@ -76,10 +106,15 @@ def path_speed(x0, v0, x1, v1, h):
     where ``|b0|, |b1| <= 1`` on [0, 1]; so ``D = |c| + |h v0 - c| + |h v1 - c|``,
     which is ``|c|`` for a straight path at constant speed.
     """
-    h = np.asarray(h, dtype=float).reshape(-1, 1) if np.ndim(h) else h
-    c = x1 - x0
-    e0, e1 = h * v0 - c, h * v1 - c
-    return sum(np.sqrt(np.einsum("ij,ij->i", w, w)) for w in (c, e0, e1))
+    k, d = np.shape(x0)
+    h = _steps(h, k)
+    sums = np.zeros((3, k))
+    for a in range(d):  # a loop over the d coordinates
+        chord = x1[:, a] - x0[:, a]
+        sums[0] += chord * chord
+        sums[1] += (h * v0[:, a] - chord) ** 2
+        sums[2] += (h * v1[:, a] - chord) ** 2
+    return np.sqrt(sums).sum(axis=0)
 
 
 def first_crossing(surface, path, n, samples=8, speed=None, iterations=60):
