@@ -102,6 +102,9 @@ def plot_bounce_study(study, ax=None):
         k = np.arange(len(hk))
         ax.plot(k, hk, "o-" if method == "backtrack" else "s-", ms=3, label=f"{method}, eps = {eps:g}")
         ax.plot(k, eps ** (2 * k), "k--", lw=0.8)
+    from matplotlib.ticker import MaxNLocator
+
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel("bounce k")
     ax.set_ylabel("height of arc k (m)")
     ax.set_title(f"Dropped ball, h = {study['h']} s (dashed: eps^(2k))")
