@@ -311,3 +311,13 @@ def test_bad_input(make, match):
     """Mistakes raise ValueError naming the argument."""
     with pytest.raises(ValueError, match=match):
         make()
+
+
+def test_bounce_study_table():
+    """The lecture's bounce study: backtracking follows eps^(2k) to round-off, projection does not."""
+    from particles.bounce_study import bounce_study, format_bounce_table
+
+    study = bounce_study(restitutions=(1.0,), bounces=5, h=0.02)
+    assert study["drift"]["backtrack", 1.0] < 1e-9
+    assert study["drift"]["project", 1.0] > 0.05
+    assert "backtrack  1.00        5" in format_bounce_table(study)
