@@ -59,7 +59,7 @@ def bounce_heights(method="backtrack", restitution=1.0, bounces=20, h=0.01, step
     t_end = flight * (0.5 + sum(max(restitution, 0.05) ** k for k in range(1, bounces + 1)))
     t, X, contacts = floor.run(ball, 1.3 * t_end if method == "project" else t_end, h, method=stepper)
     top = X[:, 0, 0, 1] + X[:, 0, 1, 1] ** 2 / (2 * G)
-    edges = np.concatenate([[-np.inf], contacts.time])
+    edges = np.concatenate([[-np.inf], contacts.time, [np.inf]])  # the formula holds on part of an arc too
     arcs = [(t > a) & (t < b) for a, b in zip(edges[:-1], edges[1:])]
     return np.array([top[arc].mean() for arc in arcs if arc.any()])[:bounces + 1], contacts
 
