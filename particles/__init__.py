@@ -10,7 +10,7 @@ array, and ODE steppers ``step(f, X, t, h)``.
 >>> t, X = ps.run(0.5, h=0.01, method="verlet")
 """
 
-from . import forces, integrators, neighbors
+from . import constraints, forces, implicit, integrators, massspring, neighbors, springs
 from .errors import ConvergenceError, SimulationDiverged
 from .integrators import INTEGRATORS, integrate
 from .system import ParticleSystem
@@ -23,7 +23,11 @@ __all__ = [
     "integrate",
     "SimulationDiverged",
     "ConvergenceError",
+    "constraints",
     "forces",
+    "implicit",
     "integrators",
+    "massspring",
     "neighbors",
+    "springs",
 ]
