@@ -13,6 +13,13 @@ def _tour(args):
     return 0
 
 
+def _study(args):
+    from .studies.report import write_study
+
+    write_study(args.name, args.out)
+    return 0
+
+
 def build_parser():
     parser = argparse.ArgumentParser(
         prog="particles",
@@ -23,6 +30,11 @@ def build_parser():
     tour = sub.add_parser("tour", help="run the course tour: figures, animations and tables")
     tour.add_argument("--out", default="out", help="output folder (default: out)")
     tour.set_defaults(run=_tour)
+
+    study = sub.add_parser("study", help="run a measured study and write its figure (PNG, SVG) and table (CSV)")
+    study.add_argument("name", choices=["order", "stability", "provot", "discretization", "all"])
+    study.add_argument("--out", default="out/studies", help="output folder (default: out/studies)")
+    study.set_defaults(run=_study)
     return parser
 
 

@@ -46,6 +46,8 @@ from .system import ParticleSystem
 
 __all__ = ["MassSpringSystem", "string", "hair", "cloth", "cloth_masses", "cloth_stiffness"]
 
+SYMPLECTIC_LIMIT = 2.0  # symplectic Euler and Verlet are stable for omega h <= 2
+
 SCALINGS = ("naive", "physical")
 
 
@@ -118,6 +120,34 @@ class MassSpringSystem(ParticleSystem):
             kx, kv = s.jacobians(X[:, 0], X[:, 1], clamp=clamp)
             Kx, Kv = Kx + kx, Kv + kv
         return Kx, Kv
+
+    def highest_frequency(self, X=None):
+        """Largest angular frequency ``omega_max`` (rad/s) of small oscillations about `X`.
+
+        The square root of the largest eigenvalue of ``-M^-1 K`` (springs only,
+        compressed springs clamped), computed for the free particles with
+        ``scipy.sparse.linalg.eigsh``. Symplectic Euler and Verlet need
+        ``h <= 2 / omega_max``: see :meth:`max_stable_step`.
+        """
+        import scipy.sparse.linalg
+
+        X = self.X if X is None else self._check_state(X)
+        Kx, _ = self.spring_jacobians(X, clamp=True)
+        d = self.d
+        free = np.setdiff1d(np.arange(self.n), self.pinned)
+        dofs = (free[:, None] * d + np.arange(d)).ravel()
+        s = 1.0 / np.sqrt(np.repeat(self.m[free], d))
+        A = -(scipy.sparse.diags(s) @ Kx.tocsr()[dofs][:, dofs] @ scipy.sparse.diags(s))  # same spectrum as -M^-1 K
+        if A.shape[0] < 3:
+            lam = np.linalg.eigvalsh(A.toarray()).max(initial=0.0)
+        else:
+            lam = scipy.sparse.linalg.eigsh(A, k=1, which="LA", return_eigenvectors=False, tol=1e-6)[0]
+        return float(np.sqrt(max(lam, 0.0)))
+
+    def max_stable_step(self, X=None):
+        """Largest time step of symplectic Euler (and Verlet) for this system, ``2 / omega_max``, in seconds."""
+        omega = self.highest_frequency(X)
+        return np.inf if omega == 0 else SYMPLECTIC_LIMIT / omega
 
     def other_forces(self):
         """The forces that are not spring sets (gravity, damping, wind, bending)."""
