@@ -20,6 +20,13 @@ def _study(args):
     return 0
 
 
+def _site(args):
+    from .site import build_site
+
+    build_site(args.out, args.lectures, timeout=args.timeout)
+    return 0
+
+
 def build_parser():
     parser = argparse.ArgumentParser(
         prog="particles",
@@ -35,6 +42,12 @@ def build_parser():
     study.add_argument("name", choices=["order", "stability", "provot", "discretization", "all"])
     study.add_argument("--out", default="out/studies", help="output folder (default: out/studies)")
     study.set_defaults(run=_study)
+
+    site = sub.add_parser("site", help="execute the lectures and write a static HTML course site")
+    site.add_argument("--out", default="site", help="output folder (default: site)")
+    site.add_argument("--lectures", default="lectures", help="folder of NN_topic.ipynb lectures")
+    site.add_argument("--timeout", type=float, default=600, help="seconds allowed per cell")
+    site.set_defaults(run=_site)
     return parser
 
 
