@@ -14,7 +14,8 @@ imported on demand because it loads Matplotlib's pyplot).
 >>> t, X = ps.run(0.5, h=0.01, method="verlet")
 """
 
-from . import collisions, effects, emitters, flocking, forces, integrators, neighbors, surfaces
+from . import (collisions, constraints, effects, emitters, flocking, forces, implicit, integrators, massspring,
+               neighbors, springs, surfaces)
 from .collisions import Collider
 from .effects import ParticleEffect
 from .errors import ConvergenceError, SimulationDiverged
@@ -33,9 +34,13 @@ __all__ = [
     "Collider",
     "ParticleEffect",
     "Flock",
+    "constraints",
     "forces",
+    "implicit",
     "integrators",
+    "massspring",
     "neighbors",
+    "springs",
     "surfaces",
     "collisions",
     "emitters",

@@ -25,6 +25,20 @@ def _demo(args):
     return 0
 
 
+def _study(args):
+    from .studies.report import write_study
+
+    write_study(args.name, args.out)
+    return 0
+
+
+def _site(args):
+    from .site import build_site
+
+    build_site(args.out, args.lectures, timeout=args.timeout)
+    return 0
+
+
 def build_parser():
     from .demos import DEMOS
 
@@ -49,6 +63,17 @@ def build_parser():
     demo.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     demo.add_argument("--html", action="store_true", help="also write NAME.html, an HTML/JavaScript player")
     demo.set_defaults(run=_demo)
+
+    study = sub.add_parser("study", help="run a measured study and write its figure (PNG, SVG) and table (CSV)")
+    study.add_argument("name", choices=["order", "stability", "provot", "discretization", "bounce", "all"])
+    study.add_argument("--out", default="out/studies", help="output folder (default: out/studies)")
+    study.set_defaults(run=_study)
+
+    site = sub.add_parser("site", help="execute the lectures and write a static HTML course site")
+    site.add_argument("--out", default="site", help="output folder (default: site)")
+    site.add_argument("--lectures", default="lectures", help="folder of NN_topic.ipynb lectures")
+    site.add_argument("--timeout", type=float, default=600, help="seconds allowed per cell")
+    site.set_defaults(run=_site)
     return parser
 
 

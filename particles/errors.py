@@ -9,7 +9,7 @@ __all__ = ["SimulationDiverged", "ConvergenceError"]
 
 
 class SimulationDiverged(RuntimeError):
-    """The state became non-finite (inf or NaN) during a simulation.
+    """The state blew up (inf, NaN, or a trillion-fold growth) during a simulation.
 
     Raised by :func:`particles.integrators.integrate` and
     :meth:`particles.ParticleSystem.run` instead of returning NaNs.
@@ -30,7 +30,7 @@ class SimulationDiverged(RuntimeError):
         self.step, self.t, self.h, self.method = step, t, h, method
         message = (
             f"the simulation diverged at step {step} (t = {t:.6g} s): the state "
-            f"became non-finite with method {method!r} and h = {h:.6g} s. The likely "
+            f"blew up with method {method!r} and h = {h:.6g} s. The likely "
             f"cause is a time step above the stability limit of {method!r} for this "
             "system (stiff springs, strong forces or too little damping); reduce h, "
             "add damping, or use an implicit method."

@@ -111,21 +111,33 @@ class Gravity(Force):
 
 
 class Damping(Force):
-    """Viscous damping opposing motion: ``F = -d v``.
+    """Viscous damping opposing motion: ``F = -d v``, or ``F = -rate m v``.
 
     Parameters
     ----------
-    d : float
-        Damping coefficient, in kg/s, >= 0. A little damping lets a system
-        settle and can stabilise a solver; too much makes motion look as if
-        it happened in glue (the velocity relaxes in ``m / d`` seconds).
+    d : float, optional
+        Damping coefficient, in kg/s, >= 0, the same for every particle. A
+        little damping lets a system settle and can stabilise a solver; too
+        much makes motion look as if it happened in glue (the velocity
+        relaxes in ``m / d`` seconds).
+    rate : float, optional
+        Instead of `d`: damping per unit mass, in 1/s (``d_i = rate m_i``), so
+        that every particle relaxes in ``1 / rate`` seconds whatever its
+        mass. Mass-spring builders use it so that damping does not depend on
+        how finely a body is discretized.
     """
 
-    def __init__(self, d):
-        self.d = nonnegative_number(d, "d", "kg/s")
+    def __init__(self, d=None, rate=None):
+        if (d is None) == (rate is None):
+            raise ValueError("give exactly one of d (kg/s) and rate (1/s)")
+        self.d = None if d is None else nonnegative_number(d, "d", "kg/s")
+        self.rate = None if rate is None else nonnegative_number(rate, "rate", "1/s")
 
     def add_to(self, F, x, v, t, m):
-        F -= self.d * v
+        if self.rate is None:
+            F -= self.d * v
+        else:
+            F -= (self.rate * m)[:, None] * v
 
 
 class Wind(Force):
@@ -146,6 +158,10 @@ class Wind(Force):
     wavelength : float
         Distance between gust fronts along the wind, in metres (``inf``: the
         whole field gusts at once).
+    per_mass : bool
+        If True, `strength` is an acceleration (m/s^2) and each particle gets
+        ``m`` times it, so the wind on a body does not depend on how many
+        particles discretize it.
 
     Notes
     -----
@@ -153,21 +169,27 @@ class Wind(Force):
     motion bounded.
     """
 
-    def __init__(self, strength, gust=0.0, period=1.0, wavelength=np.inf):
+    def __init__(self, strength, gust=0.0, period=1.0, wavelength=np.inf, per_mass=False):
         self.strength = _vector(strength, "strength")
+        self.per_mass = bool(per_mass)
         self.gust = nonnegative_number(gust, "gust")
         self.period = positive_number(period, "period", "seconds")
         self.wavelength = np.inf if wavelength == np.inf else positive_number(wavelength, "wavelength", "metres")
 
     def add_to(self, F, x, v, t, m):
         s = _matching(self.strength, F, "strength")
-        if self.gust == 0.0:
+        if self.gust == 0.0 and not self.per_mass:
             F += s
             return
-        norm = np.linalg.norm(s)
-        along = x @ (s / norm) if norm > 0 else np.zeros(len(x))
-        phase = 2.0 * np.pi * (t / self.period - along / self.wavelength)
-        F += (1.0 + self.gust * np.sin(phase))[:, None] * s
+        scale = np.ones(len(x))
+        if self.gust:
+            norm = np.linalg.norm(s)
+            along = x @ (s / norm) if norm > 0 else np.zeros(len(x))
+            scale += self.gust * np.sin(2.0 * np.pi * (t / self.period - along / self.wavelength))
+        if self.per_mass:
+            scale *= m
+        for a in range(len(s)):  # per coordinate: F += scale[:, None] * s
+            F[:, a] += s[a] * scale
 
 
 class Attractor(Force):

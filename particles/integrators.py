@@ -409,6 +409,10 @@ def step_times(t0, t1, h):
     return t
 
 
+BLOWUP_FACTOR = 1e12
+"""integrate() stops when max|X| exceeds this factor times (1 + max|X0|)."""
+
+
 def _empty_frames(K, X):
     """An empty array of K states, each stored in the memory order of X.
 
@@ -450,7 +454,9 @@ def integrate(f, X0, t0, t1, h, method="rk4", every=1, **options):
     Raises
     ------
     SimulationDiverged
-        When the state becomes inf or NaN, naming the step and the time.
+        When the state becomes inf or NaN, or grows beyond
+        :data:`BLOWUP_FACTOR` times ``1 + max|X0|`` (an instability caught
+        before it overflows), naming the step and the time.
 
     Examples
     --------
@@ -472,11 +478,17 @@ def integrate(f, X0, t0, t1, h, method="rk4", every=1, **options):
     out = _empty_frames(len(keep), X)
     out[0] = X
     slot = 1
+    # a state that grows a trillion-fold has blown up, even before it overflows
+    blowup = BLOWUP_FACTOR * (1.0 + np.max(np.abs(X), initial=0.0))
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         for k in range(1, len(times)):
             X = step(f, X, times[k - 1], times[k] - times[k - 1], **options)
-            if not np.all(np.isfinite(X)):
-                raise SimulationDiverged(k, times[k - 1], float(h), _name_of(step))
+            size = np.max(np.abs(X), initial=0.0)
+            if not size <= blowup:  # also true for inf and NaN
+                detail = ""
+                if np.isfinite(size):
+                    detail = f"(Its largest entry reached {size:.3g}, over {BLOWUP_FACTOR:.0e} times its start.)"
+                raise SimulationDiverged(k, times[k - 1], float(h), _name_of(step), detail)
             if slot < len(keep) and keep[slot] == k:
                 out[slot] = X
                 slot += 1

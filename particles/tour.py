@@ -4,13 +4,12 @@ Each part is a function that computes data and a separate step that draws it,
 so that tests and lectures can call the same functions without a window.
 """
 
-import csv
 import time
 from pathlib import Path
 
 import numpy as np
 
-from . import bounce_study, demos, forces, render, studies
+from . import demos, forces, render
 from .neighbors import all_pairs, cell_pairs
 from .system import ParticleSystem
 
@@ -60,13 +59,6 @@ def lennard_jones_costs(sizes=(250, 500, 1000, 2000), density=0.8, cutoff=2.5, s
     return rows
 
 
-def _write_csv(path, rows):
-    with open(path, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-
-
 def run_tour(out="out", log=print):
     """Run every part of the tour, write its files into `out`, print a summary.
 
@@ -75,26 +67,16 @@ def run_tour(out="out", log=print):
     list of pathlib.Path
         The files written.
     """
-    import matplotlib.pyplot as plt
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written = []
     start = time.perf_counter()
 
-    log("1. Integrator order: global error at t = 5 s on the harmonic oscillator")
-    study = studies.convergence_study("harmonic_oscillator")
-    log(studies.format_table(study))
-    fig = studies.plot_convergence(study)
-    for ext in ("png", "svg"):
-        fig.savefig(out / f"convergence.{ext}", dpi=120)
-        written.append(out / f"convergence.{ext}")
-    plt.close(fig)
-    _write_csv(out / "convergence.csv", [
-        {"method": m, "h": h, "error": e}
-        for m, errs in study["error"].items() for h, e in zip(study["h"], errs)
-    ])
-    written.append(out / "convergence.csv")
+    from .studies.report import write_study, write_table
+
+    log("1. Integrator order: global error at t = 5 s against the step size (particles study order)")
+    written += write_study("order", out, log=lambda line: log("   " + line))
 
     log("\n2. A particle system in a force field (vortex + attractor + gravity + damping)")
     t, X = force_field_scene()
@@ -109,23 +91,16 @@ def run_tour(out="out", log=print):
     for r in rows:
         log(f"   {r['n']:>6} {r['pairs']:>8} {1e3 * r['all_s']:>10.1f} {1e3 * r['cells_s']:>11.1f} "
             f"{r['all_s'] / r['cells_s']:>7.1f}")
-    _write_csv(out / "lennard_jones_costs.csv", rows)
-    written.append(out / "lennard_jones_costs.csv")
+    written.append(write_table(out, "lennard_jones_costs", rows))
 
-    log("\n4. Collisions: a dropped ball, backtracking vs projection (verlet, h = 0.01 s)")
-    study = bounce_study.bounce_study()
-    log(bounce_study.format_bounce_table(study))
-    fig = bounce_study.plot_bounce_study(study)
-    fig.savefig(out / "bounces.png", dpi=120)
-    written.append(out / "bounces.png")
-    plt.close(fig)
-    _write_csv(out / "bounces.csv", [
-        {"method": m, "restitution": e, "bounce": k, "height": hk}
-        for (m, e), heights in study["heights"].items() for k, hk in enumerate(heights)
-    ])
-    written.append(out / "bounces.csv")
+    log("\n4. Stiffness, Provot's constraint, discretization (particles study NAME)")
+    for name in ("stability", "provot", "discretization"):
+        written += write_study(name, out, log=lambda line: log("   " + line))
 
-    log("\n5. Particle effects: emitters, lifetimes, collisions, hierarchies, flocks")
+    log("\n5. Collisions: a dropped ball, backtracking vs projection (particles study bounce)")
+    written += write_study("bounce", out, log=lambda line: log("   " + line))
+
+    log("\n6. Particle effects: emitters, lifetimes, collisions, hierarchies, flocks (particles demo NAME)")
     for name in demos.DEMOS:  # a loop over the registered demos
         t0 = time.perf_counter()
         data, paths = demos.write_demo(name, out)

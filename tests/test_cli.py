@@ -15,15 +15,15 @@ from particles.tour import force_field_scene, lennard_jones_costs
 def test_tour_writes_files_and_prints_table(tmp_path, capsys):
     assert main(["tour", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
-    for name in ("convergence.png", "convergence.svg", "convergence.csv", "force_field.gif",
-                 "lennard_jones_costs.csv"):
+    for name in ("order.png", "order.svg", "order.csv", "force_field.gif", "lennard_jones_costs.csv",
+                 "stability.png", "provot.svg", "discretization.csv"):
         assert (tmp_path / name).stat().st_size > 0, name
-    assert "rk4                       4      4.0" in out
+    assert "rk4                expected 4  observed 4.0" in out
     with Image.open(tmp_path / "force_field.gif") as gif:
         assert gif.n_frames == len(force_field_scene()[0])
-    rows = list(csv.DictReader(open(tmp_path / "convergence.csv")))
+    rows = list(csv.DictReader(open(tmp_path / "order.csv")))
     assert {r["method"] for r in rows} >= {"euler", "rk4", "verlet", "implicit_euler"}
-    assert (tmp_path / "bounces.png").stat().st_size > 0
+    assert (tmp_path / "bounce.png").stat().st_size > 0
     assert "backtrack  1.00       20" in out
     for name, demo in DEMOS.items():  # the effects: one GIF per demo, full length
         defaults = inspect.signature(demo.function).parameters

@@ -315,7 +315,7 @@ def test_bad_input(make, match):
 
 def test_bounce_study_table():
     """The lecture's bounce study: backtracking follows eps^(2k) to round-off, projection does not."""
-    from particles.bounce_study import bounce_study, format_bounce_table
+    from particles.studies.bounce import bounce_study, format_bounce_table
 
     study = bounce_study(restitutions=(1.0,), bounces=5, h=0.02)
     assert study["drift"]["backtrack", 1.0] < 1e-9

@@ -1,14 +1,15 @@
-"""Measured studies: convergence orders (and, in later lessons, stability).
+"""Order of convergence: global error against step size on problems with exact solutions.
 
-The functions return data (arrays and tables); plotting is separate, so the
-same study serves a test, a lecture and ``particles study``.
+Halving ``h`` divides the error of a method of order ``p`` by about ``2^p``;
+on a log-log plot of error against ``h`` the points fall on a line of slope
+``p``, which :func:`fit_order` measures.
 """
 
 import numpy as np
 
-from ._checks import as_float_array
-from .integrators import INTEGRATORS, integrate
-from .problems import Problem, get_problem
+from .._checks import as_float_array
+from ..integrators import INTEGRATORS, integrate
+from ..problems import Problem, get_problem
 
 __all__ = ["fit_order", "global_error", "convergence_study", "plot_convergence", "format_table"]
 

@@ -1,0 +1,204 @@
+"""Strings, hair and cloth builders: structure, statics, and discretization-aware scaling."""
+
+import numpy as np
+import pytest
+from scipy.optimize import fsolve
+
+from particles.implicit import relax
+from particles.massspring import cloth, cloth_masses, cloth_springs, cloth_stiffness, hair, string
+
+g = 9.81
+
+
+def chain_statics(m, k, L0, A, B):
+    """Static shape of a chain of point masses on springs hung between pins A and B (2D).
+
+    Independent of the simulator: each segment carries a tension vector (H, V_s);
+    H is the same in every segment and V grows by each mass's weight (the chain
+    slopes down from A, V < 0, then up); a segment's length is L0 + tension / k.
+    H and the first V are found so that the chain ends at B. Returns positions,
+    shape (n, 2).
+    """
+    weights = m[1:-1] * g
+
+    def shape(p):
+        H, V0 = p
+        V = V0 + np.concatenate([[0.0], np.cumsum(weights)])  # vertical tension component per segment
+        T = np.hypot(H, V)
+        seg = (L0 + T / k)[:, None] * np.stack([H / T, V / T], axis=1)
+        return A + np.concatenate([[[0.0, 0.0]], np.cumsum(seg, axis=0)])
+
+    H, V0 = fsolve(lambda p: shape(p)[-1] - B, [m.sum() * g, -m.sum() * g / 2], xtol=1e-14)
+    return shape((H, V0))
+
+
+def test_string_structure_and_errors():
+    s = string(10, 2.0)
+    assert s.n == 10 and list(s.springs) == ["structural"]
+    np.testing.assert_allclose(s.springs["structural"].rest_length, 2.0 / 9)
+    assert s.pinned.tolist() == [0]
+    assert string(10, pin="both").pinned.tolist() == [0, 9]
+    with pytest.raises(ValueError, match="pin must be 'top', 'root', 'both' or 'none'"):
+        string(10, pin="middle")
+    with pytest.raises(ValueError, match="n must be an integer >= 2"):
+        string(1)
+    with pytest.raises(ValueError, match="scaling must be 'naive' or 'physical'"):
+        string(5, scaling="exact")
+
+
+def test_hanging_string_from_one_pin_matches_statics_and_reaction_is_weight():
+    """Each spring stretches by the weight below it / k; the pin carries the whole weight."""
+    n, k, m = 12, 40.0, 0.02
+    s = string(n, 1.0, k=k, mass=m)
+    relax(s, tol=1e-12)
+    depth = -s.X[:, 0, 1]
+    L0 = 1.0 / (n - 1)
+    below = m * g * np.arange(n - 1, 0, -1)  # weight below each spring
+    np.testing.assert_allclose(depth, np.concatenate([[0.0], np.cumsum(L0 + below / k)]), rtol=1e-9, atol=1e-12)
+    assert s.X[-1, 0, 1] < -1.0  # longer than its rest length: a rubber band
+    np.testing.assert_allclose(s.reaction_forces(), [[0.0, n * m * g]], rtol=1e-9)
+
+
+@pytest.mark.parametrize("scaling", ["naive", "physical"])
+def test_string_between_two_pins_settles_to_static_shape(scaling):
+    """The relaxed string equals the elastic-catenary statics of the discrete chain."""
+    s = string(15, 1.0, pin="both", span=0.8, scaling=scaling, k=30.0, mass=0.01,
+               linear_density=0.1, stretch_modulus=5.0)
+    relax(s, tol=1e-12)
+    x = s.X[:, 0]
+    k = s.springs["structural"].k[0]
+    expected = chain_statics(s.m, k, 1.0 / 14, x[0], x[-1])
+    np.testing.assert_allclose(x, expected, atol=1e-8)
+    R = s.reaction_forces()
+    np.testing.assert_allclose(R.sum(axis=0), [0.0, s.m.sum() * g], rtol=1e-8)  # pins carry the weight
+
+
+def test_physical_string_converges_to_continuous_catenary():
+    """Refining a physical string converges to the continuous elastic catenary (n -> inf)."""
+    def sag(n):
+        s = string(n, 1.0, pin="both", span=0.8, scaling="physical", linear_density=0.1, stretch_modulus=5.0)
+        x = chain_statics(s.m, s.springs["structural"].k[0], 1.0 / (n - 1), np.array([-0.4, 0.0]),
+                          np.array([0.4, 0.0]))
+        return -x[:, 1].min()
+
+    limit = sag(1601)
+    errors = [abs(sag(n) - limit) for n in (11, 21, 41)]
+    assert errors[0] > errors[1] > errors[2]
+    assert errors[2] < 0.01 * limit
+
+
+def test_naive_string_changes_with_resolution():
+    """Fixed per-particle mass and stiffness: a finer string is heavier and softer."""
+    sags = []
+    for n in (10, 20, 40):
+        s = string(n, 1.0, pin="both", span=0.8, mass=0.01, k=30.0)
+        relax(s)
+        sags.append(-s.X[:, 0, 1].min())
+    assert sags[2] > 1.5 * sags[0]
+
+
+def test_physical_masses_and_stiffness_of_string():
+    s = string(11, 2.0, scaling="physical", linear_density=0.3, stretch_modulus=8.0)
+    assert s.m.sum() == pytest.approx(0.6)
+    assert s.m[0] == pytest.approx(s.m[1] / 2)
+    np.testing.assert_allclose(s.springs["structural"].k, 8.0 / 0.2)
+
+
+def test_hair_droops_like_a_cantilever():
+    """Tip deflection converges (first order) to q L^4 / (8 EI), and stiffer hair droops less."""
+    EI, mu, L = 0.2, 0.05, 0.3
+    theory = mu * g * L**4 / (8 * EI)
+    ratios = []
+    for n in (21, 41, 81):
+        h = hair(n, L, scaling="physical", linear_density=mu, bending_modulus=EI, stretch_modulus=1e4)
+        relax(h)
+        ratios.append(-h.X[-1, 0, 1] / theory)
+    errors = np.abs(np.array(ratios) - 1)
+    assert errors[1] < 0.6 * errors[0] and errors[2] < 0.6 * errors[1]
+    assert errors[2] < 0.03
+    # small deflections: twice as stiff, half the droop
+    stiff = hair(21, L, scaling="physical", linear_density=mu, bending_modulus=2 * EI, stretch_modulus=1e4)
+    relax(stiff)
+    assert -stiff.X[-1, 0, 1] / theory == pytest.approx(ratios[0] / 2, rel=0.01)
+
+
+def test_cloth_spring_sets():
+    """Structural, shear and flexion springs join the grid neighbours the slide names."""
+    nx, ny = 5, 4
+    pairs = cloth_springs(nx, ny)
+    counts = {k: len(v) for k, v in pairs.items()}
+    assert counts == {"structural": ny * (nx - 1) + (ny - 1) * nx, "shear": 2 * (nx - 1) * (ny - 1),
+                      "flexion": ny * (nx - 2) + (ny - 2) * nx}
+    c = cloth(nx, ny, width=0.4, height=0.3)
+    x = c.X[:, 0]
+    np.testing.assert_allclose(c.springs["structural"].rest_length, np.r_[[0.1] * 16, [0.1] * 15])
+    shear = c.springs["shear"]
+    np.testing.assert_allclose(np.linalg.norm(x[shear.i] - x[shear.j], axis=1), np.hypot(0.1, 0.1))
+    flex = c.springs["flexion"]
+    assert set(np.abs(flex.i - flex.j)) == {2, 2 * nx}
+    assert c.grid_shape == (ny, nx)
+
+
+def test_cloth_pins_by_name_and_index():
+    c = cloth(6, 5, pins="top corners")
+    assert c.pinned.tolist() == [0, 5]
+    assert cloth(6, 5, pins=["top left", 29]).pinned.tolist() == [0, 29]
+    assert cloth(6, 5, pins="top edge").pinned.tolist() == list(range(6))
+    assert len(cloth(6, 5, pins=None).pinned) == 0
+    with pytest.raises(ValueError, match="unknown pin name 'top centre'"):
+        cloth(6, 5, pins="top centre")
+    with pytest.raises(ValueError, match=r"pins must be particle indices in \[0, 30\)"):
+        cloth(6, 5, pins=[30])
+
+
+def test_physical_cloth_masses_and_stiffness():
+    """Masses add up to density x area; on square cells k equals the modulus (interior)."""
+    m = cloth_masses(9, 5, 2.0, 1.0, 0.3)
+    assert m.sum() == pytest.approx(0.6)
+    k = cloth_stiffness(9, 9, 1.0, 1.0, {"structural": 50.0, "shear": 10.0, "flexion": 4.0})
+    assert k["structural"].max() == pytest.approx(50.0) and k["structural"].min() == pytest.approx(25.0)
+    np.testing.assert_allclose(k["shear"], 10.0 / 4)
+    # uniform strain: each family stores the continuum energy Y e^2 / 2 x area
+    for kind, Y in (("structural", 50.0), ("flexion", 4.0)):
+        c = cloth(9, 7, width=2.0, height=1.5, scaling="physical", stretch_modulus=50.0, flexion_modulus=4.0)
+        springs = c.springs[kind]
+        along_x = np.abs(springs.i - springs.j) < 3
+        e = 0.01
+        energy = 0.5 * np.sum(springs.k[along_x] * (e * springs.rest_length[along_x]) ** 2)
+        assert energy == pytest.approx(0.5 * Y * e**2 * 2.0 * 1.5)
+
+
+def test_naive_defaults_equal_physical_at_reference_resolution():
+    naive, physical = cloth(8, 8, scaling="naive"), cloth(8, 8, scaling="physical")
+    interior = np.arange(64).reshape(8, 8)[1:-1, 1:-1].ravel()
+    np.testing.assert_allclose(naive.m[interior], physical.m[interior])
+    for kind in ("structural", "shear", "flexion"):
+        assert naive.springs[kind].k[0] == pytest.approx(physical.springs[kind].k.max())
+
+
+def cloth_sag(n, scaling, pins="top edge"):
+    c = cloth(n, n, scaling=scaling, pins=pins)
+    relax(c, h=0.2)
+    return -c.X[:, 0, 2].min() - 1.0, c
+
+
+def test_physical_scaling_sag_agrees_across_resolutions_naive_does_not():
+    """Static sag of a cloth hanging from its top edge at 8, 16, 32 particles per side."""
+    physical = [cloth_sag(n, "physical")[0] for n in (8, 16, 32)]
+    naive = [cloth_sag(n, "naive")[0] for n in (8, 16, 32)]
+    assert max(physical) / min(physical) - 1 < 0.03
+    assert naive[2] / naive[0] > 5
+
+
+def test_point_pins_concentrate_strain_under_refinement():
+    """Two pinned corners are point loads: their strain keeps growing as the grid is refined."""
+    strains = [cloth_sag(n, "physical", pins="top corners")[1].max_strain() for n in (8, 16, 32)]
+    assert strains[0] < strains[1] < strains[2]
+    assert strains[2] > 2 * strains[0]
+
+
+def test_cloth_damping_and_wind_options():
+    c = cloth(5, 5, damping=0.3, wind=[1.0, 0.0, 0.0], scaling="physical")
+    F = c.total_force(c.state(), 0.0)
+    weight = c.m[:, None] * np.array([0.0, 0.0, -g])
+    np.testing.assert_allclose(F[c.pinned], (weight + c.m[:, None] * [1.0, 0.0, 0.0])[c.pinned], atol=1e-12)
