@@ -45,8 +45,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._checks import as_float_array, nonnegative_number, positive_number
-from .integrators import step_times
+from ._checks import as_float_array, method_name, nonnegative_number, positive_number
+from .errors import SimulationDiverged
+from .integrators import INTEGRATORS, step_times
 from .crossing import cubic_path, first_crossing, hermite, hermite_coefficients, path_speed
 from .surfaces import Box, Complement, Intersection, Plane, Sphere, Surface, Union
 from .system import _pinned_indices
@@ -304,10 +305,12 @@ class Collider:
         if X_old.shape != X_new.shape:
             raise ValueError(f"X_old and X_new must have the same shape, got {X_old.shape} and {X_new.shape}")
         h = positive_number(h, "h", "seconds")
-        t = float(t)
-        X = X_new.copy(order="K")
-        free = self._free(len(X), pinned)
-        m = np.broadcast_to(as_float_array(m, "m", ndim=(0, 1)), (len(X),))
+        free = self._free(len(X_new), pinned)
+        m = np.broadcast_to(as_float_array(m, "m", ndim=(0, 1)), (len(X_new),))
+        return self._collide(X_old, X_new.copy(order="K"), float(t), h, m, free)
+
+    def _collide(self, X_old, X, t, h, m, free):
+        """:meth:`collide` on checked arguments; `X` (the end state) is corrected in place."""
         if self.method == "project":
             x, v, contacts = self._project(X[:, 0], X[:, 1], m, free, t + h)
             X[:, 0], X[:, 1] = x, v
@@ -397,15 +400,19 @@ class Collider:
             All contacts of the run.
         """
         every = _count(every, "every")
+        step = method_name(method, INTEGRATORS)
         times = step_times(system.t, t_end, h)
-        keep = sorted(set(range(0, len(times), every)) | {len(times) - 1})
+        keep = set(range(0, len(times), every)) | {len(times) - 1}
+        free, m = self._free(system.n, system.pinned), system.m
         t_out, X_out, found = [times[0]], [system.state()], []
         for k in range(1, len(times)):  # a loop over time steps
-            X_old = system.X.copy(order="K")
-            system.step(times[k] - times[k - 1], method=method)
-            system.t = times[k]
-            X, contacts = self.collide(X_old, system.X, times[k - 1], times[k] - times[k - 1], system.m, system.pinned)
-            system.X = np.asfortranarray(X)
+            X_old, h_k = system.X, times[k] - times[k - 1]
+            with np.errstate(over="ignore", invalid="ignore"):
+                X_new = np.array(step(system.derivative, X_old, times[k - 1], h_k), order="F")
+            if not np.all(np.isfinite(X_new)):
+                raise SimulationDiverged(k, times[k - 1], h_k, str(method))
+            system.X, contacts = self._collide(X_old, X_new, times[k - 1], h_k, m, free)
+            system.t = float(times[k])
             found.append(contacts)
             if k in keep:
                 t_out.append(times[k])

@@ -16,12 +16,15 @@ saves a GIF (or an HTML player). Nothing needs a window.
 Adding a demo is one decorated function, e.g. the hanging cloth of the
 mass-spring models::
 
-    @register("cloth", "a curtain pinned at two corners, swinging in the wind")
-    def cloth(seconds=4.0, fps=20, seed=0):
-        ...                                   # build and run the model
-        return DemoData("cloth", "hanging cloth", times, positions, springs=index_pairs)
+    @register("cloth", "a curtain pinned at two corners, swinging in the wind", preview=dict(seconds=2.0))
+    def cloth(seconds=4.0, fps=10, seed=0):
+        ...                                   # build and run the model, record every 1 / fps seconds
+        return DemoData("cloth", "hanging cloth", times, positions, springs=index_pairs, fps=fps)
 
-after which ``particles demo cloth`` and the tour pick it up.
+after which ``particles demo cloth`` and the tour (which writes a short
+preview of each demo, at 5 frames per second) pick it up. A demo's time step
+is its own: `fps` only says how often a frame is recorded, so a preview shows
+the same physics as the full animation.
 """
 
 from dataclasses import dataclass, field
@@ -34,6 +37,7 @@ from .collisions import Box, Collider, Plane, Sphere
 from .effects import ColorRamp, ParticleEffect
 from .emitters import Cone, Disk, Emitter, ParticleEmitter, Point, SphereSurface
 from .flocking import Boids, Flock, polarization
+from ._checks import positive_number
 from .system import ParticleSystem
 
 __all__ = ["DemoData", "DEMOS", "register", "run_demo", "animate_demo", "write_demo"]
@@ -65,8 +69,9 @@ class DemoData:
         Whether to draw the axes (slow: ticks and labels cost more than the particles).
     view : (elevation, azimuth), optional
         3D camera, in degrees.
-    fps : int
-        Frames per second of the animation (real time).
+    fps : float
+        Frames per second of the animation (real time): one frame per
+        ``1 / fps`` simulated seconds.
     info : dict
         Measured figures printed by the tour (counts, polarization...).
     """
@@ -85,7 +90,7 @@ class DemoData:
     background: str = None
     axis: bool = False
     view: tuple = None
-    fps: int = 20
+    fps: float = 20
     info: dict = field(default_factory=dict)
 
     def __len__(self):
@@ -97,16 +102,21 @@ class Demo:
     name: str
     description: str
     function: object
+    preview: dict = field(default_factory=dict)  # options of the short version written by the tour
 
 
 DEMOS = {}
 """Demo name -> :class:`Demo` (its description and function), in registration order."""
 
 
-def register(name, description):
-    """Decorator adding a demo function ``fn(seconds, fps, seed) -> DemoData`` to :data:`DEMOS`."""
+def register(name, description, preview=None):
+    """Decorator adding a demo function ``fn(seconds, fps, seed) -> DemoData`` to :data:`DEMOS`.
+
+    `preview` holds the options of the short version the tour writes
+    (default: the demo's own length at 5 frames per second).
+    """
     def add(function):
-        DEMOS[name] = Demo(name, description, function)
+        DEMOS[name] = Demo(name, description, function, {"fps": 5, **(preview or {})})
         return function
     return add
 
@@ -128,9 +138,16 @@ def _circle(center, radius, k=64, axes=(0, 1), d=2):
     return line
 
 
-def _from_effect(effect, name, title, seconds, fps, steps_per_frame, **options):
-    """Run an effect tree and package its snapshots."""
-    frames = effect.run(seconds, h=1.0 / (fps * steps_per_frame), every=steps_per_frame)
+def _every(fps, h):
+    """Steps of length `h` between frames at `fps` frames per second (at least 1)."""
+    return max(1, int(round(1.0 / (positive_number(fps, "fps", "frames per second") * h))))
+
+
+def _from_effect(effect, name, title, seconds, fps, h, **options):
+    """Run an effect tree with steps of `h` seconds and package a snapshot per frame."""
+    every = _every(fps, h)
+    frames = effect.run(seconds, h=h, every=every)
+    fps = 1.0 / (every * h)
     largest = max(sum(s.counts.values()) for s in frames)
     return DemoData(name, title, np.array([s.t for s in frames]), [s.x for s in frames],
                     velocities=[s.v for s in frames], colors=[s.rgba for s in frames],
@@ -138,20 +155,22 @@ def _from_effect(effect, name, title, seconds, fps, steps_per_frame, **options):
                     info={"most particles": largest, **options.pop("info", {})}, **options)
 
 
-@register("fountain", "3D: water from a nozzle, splashing on the ground (collisions, lifetimes)")
-def fountain(seconds=4.0, fps=12, seed=0):
+@register("fountain", "3D: water from a nozzle, splashing on the ground (collisions, lifetimes)",
+          preview=dict(seconds=2.4))
+def fountain(seconds=4.0, fps=10, seed=0):
     nozzle = Emitter(250.0, Disk([0.0, 0.0, 0.05], 0.04), Cone([0, 0, 1], 4.4, 0.3, angle=0.3),
                      lifetime=(2.4, 0.4))
     ground = Collider(Plane([0, 0, 0], [0, 0, 1]), restitution=0.3, friction=0.6)
     water = ParticleEffect(3, [nozzle], forces=[forces.Gravity([0, 0, -9.81]), forces.Damping(0.05)],
                            collider=ground, color=ColorRamp(["#f2fbff", "#5aa9e6", "#1d4e89"], [0.9, 0.8, 0.0]),
                            size=5.0, seed=seed, name="water", bounds=([-3, -3, -1], [3, 3, 3]))
-    return _from_effect(water, "fountain", "fountain", seconds, fps, 3, blur=0.03,
+    return _from_effect(water, "fountain", "fountain", seconds, fps, 1 / 40, blur=0.03,
                         limits=[(-1.6, 1.6), (-1.6, 1.6), (0.0, 1.6)], view=(18, -60),
                         lines=[_circle([0, 0, 0], 1.5, axes=(0, 1), d=3)])
 
 
-@register("fireworks", "2D: rockets with trails and bursts, systems of systems (Reeves' hierarchy)")
+@register("fireworks", "2D: rockets with trails and bursts, systems of systems (Reeves' hierarchy)",
+          preview=dict(seconds=3.6))
 def fireworks(seconds=5.0, fps=15, seed=0):
     g = forces.Gravity([0.0, -9.81])
     launcher = Emitter(1.6, Point([0.0, 0.0]), Cone([0, 1], 12.0, 1.5, angle=0.3), lifetime=(1.1, 0.2),
@@ -170,11 +189,12 @@ def fireworks(seconds=5.0, fps=15, seed=0):
                                               color=ColorRamp(["white", "#ffe08a"], [1.0, 0.0])))
     crackle.add_emitter(ParticleEmitter(sparks, count=(0.6, 0.6), when="death", inherit=1.0,
                                         velocity=Cone([0, 1], 0.8, angle=np.pi), lifetime=(0.25, 0.1)))
-    return _from_effect(rockets, "fireworks", "fireworks", seconds, fps, 2, blur=0.04, background="black",
+    return _from_effect(rockets, "fireworks", "fireworks", seconds, fps, 1 / 30, blur=0.04, background="black",
                         axis=False, limits=[(-7.0, 7.0), (0.0, 12.0)])
 
 
-@register("smoke", "2D: a moving chimney, gravity pointing up, wind gusts; puffs grow and fade")
+@register("smoke", "2D: a moving chimney, gravity pointing up, wind gusts; puffs grow and fade",
+          preview=dict(seconds=3.0))
 def smoke(seconds=4.0, fps=15, seed=0):
     chimney = Disk(lambda t: np.stack([0.8 * np.sin(0.9 * t), np.zeros_like(t)], axis=-1), 0.12)
     source = Emitter(120.0, chimney, Cone([0, 1], 0.5, 0.3, angle=0.6), lifetime=(3.5, 1.0), inherit=0.5)
@@ -183,11 +203,12 @@ def smoke(seconds=4.0, fps=15, seed=0):
         forces=[forces.Gravity([0.0, 0.35]), forces.Damping(0.6),
                 forces.Wind([0.25, 0.0], gust=0.8, period=2.5, wavelength=3.0)],
         color=ColorRamp(["0.25", "0.55", "0.85"], [0.5, 0.3, 0.0]))
-    return _from_effect(puffs, "smoke", "smoke (gravity up, fading)", seconds, fps, 2,
+    return _from_effect(puffs, "smoke", "smoke (gravity up, fading)", seconds, fps, 1 / 30,
                         limits=[(-2.5, 3.5), (-0.2, 5.0)], lines=[np.array([[-2.5, -0.05], [3.5, -0.05]])])
 
 
-@register("bouncing", "2D: balls in a box with a ramp and an obstacle (restitution 0.95, backtracking)")
+@register("bouncing", "2D: balls in a box with a ramp and an obstacle (restitution 0.95, backtracking)",
+          preview=dict(seconds=2.4))
 def bouncing(seconds=4.0, fps=15, seed=0):
     rng = np.random.default_rng(seed)
     n = 24
@@ -198,13 +219,14 @@ def bouncing(seconds=4.0, fps=15, seed=0):
     system = ParticleSystem(x, v=rng.normal(0.0, 1.5, x.shape), forces=[forces.Gravity([0.0, -9.81])])
     E0 = system.kinetic_energy() + system.potential_energy()
     collider = Collider(scene, restitution=0.95, friction=0.02, method="backtrack")
-    steps = 6
-    t, X, contacts = collider.run(system, seconds, h=1.0 / (fps * steps), method="verlet", every=steps)
+    h = 1 / 90
+    every = _every(fps, h)
+    t, X, contacts = collider.run(system, seconds, h=h, method="verlet", every=every)
     E1 = system.kinetic_energy() + system.potential_energy()
     color = np.array([(*c, 1.0) for c in _palette(len(x))])
     walls = np.array([[0, 0], [4, 0], [4, 3], [0, 3], [0, 0]], dtype=float)
     return DemoData("bouncing", "bouncing balls", t, list(X[:, :, 0]), velocities=list(X[:, :, 1]),
-                    colors=[color] * len(t), sizes=[np.full(len(x), 60.0)] * len(t), blur=0.03, fps=fps,
+                    colors=[color] * len(t), sizes=[np.full(len(x), 60.0)] * len(t), blur=0.03, fps=1 / (every * h),
                     lines=[walls, _circle(ball.center, ball.radius), np.array([[0.0, 0.8], [1.6, 0.0]])],
                     limits=[(-0.1, 4.1), (-0.1, 3.1)],
                     info={"contacts": len(contacts), "energy kept": f"{E1 / E0:.2f}"})
@@ -227,19 +249,21 @@ def flock(seconds=8.0, fps=10, seed=0):
     v = np.column_stack([np.cos(angle), np.sin(angle)])
     rules = Boids(3.0, separation=0.1, alignment=2.0, cohesion=0.5, max_force=3.0)  # as in the tests
     birds = Flock(x, v, rules, min_speed=0.5, max_speed=2.0)
-    steps = 5
-    t, X = birds.run(seconds, h=1.0 / (fps * steps), every=steps)
+    h = 1 / 50
+    every = _every(fps, h)
+    t, X = birds.run(seconds, h=h, every=every)
     heading = np.arctan2(X[:, :, 1, 1], X[:, :, 1, 0]) / (2 * np.pi) % 1.0
     colors = [np.column_stack([hsv_to_rgb(np.column_stack([hk, np.full(n, 0.75), np.full(n, 0.9)])),
                                np.ones(n)]) for hk in heading]
     p = [polarization(Xk[:, 1]) for Xk in X]
     centred = [Xk[:, 0] - Xk[:, 0].mean(axis=0) for Xk in X]  # a camera that follows the flock
     return DemoData("flock", "flock (camera follows)", t, centred, velocities=list(X[:, :, 1]), colors=colors,
-                    sizes=[np.full(n, 12.0)] * len(t), blur=0.4, fps=fps, limits=[(-8.0, 8.0), (-8.0, 8.0)],
+                    sizes=[np.full(n, 12.0)] * len(t), blur=0.4, fps=1 / (every * h), limits=[(-8.0, 8.0), (-8.0, 8.0)],
                     info={"polarization": f"{p[0]:.2f} -> {p[-1]:.2f}"})
 
 
-@register("genesis", "3D: Reeves' Genesis effect, an expanding ring of secondary systems over a planet")
+@register("genesis", "3D: Reeves' Genesis effect, an expanding ring of secondary systems over a planet",
+          preview=dict(seconds=2.4))
 def genesis(seconds=3.6, fps=15, seed=0):
     planet = np.zeros(3)
     ring = SphereSurface(planet, 1.0, polar=lambda t: (0.6 * t, 0.6 * t + 0.12))
@@ -253,7 +277,7 @@ def genesis(seconds=3.6, fps=15, seed=0):
                                      axis=planet, lifetime=(0.9, 0.3)))
     lines = [_circle([0, 0, z], np.sqrt(1 - z * z), axes=(0, 1), d=3) for z in (-0.6, -0.3, 0.0, 0.3, 0.6)]
     lines += [_circle(planet, 1.0, axes=(0, 2), d=3), _circle(planet, 1.0, axes=(1, 2), d=3)]
-    return _from_effect(systems, "genesis", "Genesis effect", seconds, fps, 2, background="black", axis=False,
+    return _from_effect(systems, "genesis", "Genesis effect", seconds, fps, 1 / 30, background="black", axis=False,
                         limits=[(-1.6, 1.6)] * 3, view=(20, -50), lines=lines)
 
 
@@ -262,7 +286,7 @@ def animate_demo(data, figsize=(4, 4)):
     from . import render
 
     return render.animate(data.positions, times=data.times, velocities=data.velocities, blur=data.blur,
-                          limits=data.limits, title=data.title, figsize=figsize, interval=1000 // data.fps,
+                          limits=data.limits, title=data.title, figsize=figsize, interval=round(1000 / data.fps),
                           colors=data.colors, sizes=data.sizes, springs=data.springs, lines=data.lines,
                           background=data.background, axis=data.axis, view=data.view)
 

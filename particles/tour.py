@@ -100,10 +100,11 @@ def run_tour(out="out", log=print):
     log("\n5. Collisions: a dropped ball, backtracking vs projection (particles study bounce)")
     written += write_study("bounce", out, log=lambda line: log("   " + line))
 
-    log("\n6. Particle effects: emitters, lifetimes, collisions, hierarchies, flocks (particles demo NAME)")
-    for name in demos.DEMOS:  # a loop over the registered demos
+    log("\n6. Particle effects: emitters, lifetimes, collisions, hierarchies, flocks")
+    log("   short previews at 5 frames/s; full length: particles demo all")
+    for name, demo in demos.DEMOS.items():  # a loop over the registered demos
         t0 = time.perf_counter()
-        data, paths = demos.write_demo(name, out)
+        data, paths = demos.write_demo(name, out, **demo.preview)
         info = ", ".join(f"{k} {v}" for k, v in data.info.items())
         log(f"   {name:<10} {len(data):>4} frames  {info}  ({time.perf_counter() - t0:.1f} s)")
         written.extend(paths)

@@ -25,10 +25,10 @@ def test_tour_writes_files_and_prints_table(tmp_path, capsys):
     assert {r["method"] for r in rows} >= {"euler", "rk4", "verlet", "implicit_euler"}
     assert (tmp_path / "bounce.png").stat().st_size > 0
     assert "backtrack  1.00       20" in out
-    for name, demo in DEMOS.items():  # the effects: one GIF per demo, full length
-        defaults = inspect.signature(demo.function).parameters
+    for name, demo in DEMOS.items():  # the effects: one preview GIF per demo
+        seconds = demo.preview.get("seconds", inspect.signature(demo.function).parameters["seconds"].default)
         with Image.open(tmp_path / f"{name}.gif") as gif:
-            assert gif.n_frames == round(defaults["seconds"].default * defaults["fps"].default) + 1, name
+            assert gif.n_frames == round(seconds * demo.preview["fps"]) + 1, name
 
 
 def test_force_field_scene_stays_bounded():

@@ -313,6 +313,16 @@ def test_bad_input(make, match):
         make()
 
 
+def test_run_reports_divergence():
+    """Collider.run raises SimulationDiverged (not NaNs) when the stepper blows up."""
+    from particles import SimulationDiverged
+    from particles.forces import Field
+
+    ps = ParticleSystem([[0.0, 1.0]], forces=[Field(lambda x, t: -1e8 * x)])
+    with pytest.raises(SimulationDiverged, match="diverged at step"):
+        Collider(Plane([0.0, 0.0], [0.0, 1.0])).run(ps, 10.0, 0.1, method="euler")
+
+
 def test_bounce_study_table():
     """The lecture's bounce study: backtracking follows eps^(2k) to round-off, projection does not."""
     from particles.studies.bounce import bounce_study, format_bounce_table
