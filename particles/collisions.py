@@ -407,11 +407,12 @@ class Collider:
         t_out, X_out, found = [times[0]], [system.state()], []
         for k in range(1, len(times)):  # a loop over time steps
             X_old, h_k = system.X, times[k] - times[k - 1]
-            with np.errstate(over="ignore", invalid="ignore"):
+            with np.errstate(over="ignore", invalid="ignore"):  # a blow-up is reported below
                 X_new = np.array(step(system.derivative, X_old, times[k - 1], h_k), order="F")
+                X_new, contacts = self._collide(X_old, X_new, times[k - 1], h_k, m, free)
             if not np.all(np.isfinite(X_new)):
                 raise SimulationDiverged(k, times[k - 1], h_k, str(method))
-            system.X, contacts = self._collide(X_old, X_new, times[k - 1], h_k, m, free)
+            system.X = X_new
             system.t = float(times[k])
             found.append(contacts)
             if k in keep:
