@@ -318,7 +318,7 @@ def test_run_reports_divergence():
     from particles import SimulationDiverged
     from particles.forces import Field
 
-    ps = ParticleSystem([[1.0, 1.0]], forces=[Field(lambda x, t: [-1e8, 0.0] * x)])  # along the floor
+    ps = ParticleSystem([[1.0, 1.0]], forces=[Field(lambda x, t: [-1e12, 0.0] * x)])  # along the floor
     with pytest.raises(SimulationDiverged, match="diverged at step"):
         Collider(Plane([0.0, 0.0], [0.0, 1.0])).run(ps, 10.0, 0.1, method="euler")
 
