@@ -459,7 +459,13 @@ class LennardJones(Force):
 
     @property
     def skin(self):
+        """Verlet-list skin, in metres."""
         return self._list.skin
+
+    @property
+    def neighbor_list(self):
+        """The :class:`~particles.neighbors.VerletList` of the ``"cells"`` mode (``builds`` counts rebuilds)."""
+        return self._list
 
     def magnitude(self, r):
         """``f(r) = k1 / r^m - k2 / r^n`` for distances `r` (no cutoff applied)."""
