@@ -63,7 +63,7 @@ def main(argv=None):
         t_search = best_time(lambda: cell_pairs(x, 2.5))
         t_kd = best_time(lambda: cKDTree(x).query_pairs(2.5, output_type="ndarray"))
         def fresh():
-            lj_fresh._list.reset()  # forget the pair list: search again
+            lj_fresh.neighbor_list.reset()  # forget the pair list: search again
             return lj_fresh(x)
 
         t_fresh = best_time(fresh)
@@ -84,7 +84,7 @@ def main(argv=None):
         ratio = f"{t_all / t_fresh:9.1f}" if t_all else f"{'-':>9}"
         all_ms = f"{1e3 * t_all:9.1f}" if t_all else f"{'(skip)':>9}"
         print(f"{n:>6} {len(i):>9} {all_ms} {1e3 * t_search:8.1f} {1e3 * t_kd:8.1f} {1e3 * t_fresh:8.1f} "
-              f"{1e3 * t_pass:8.1f} {1e3 * t_step:8.1f} {ratio} {lj_run._list.builds:>5}/{2 * steps}")
+              f"{1e3 * t_pass:8.1f} {1e3 * t_step:8.1f} {ratio} {lj_run.neighbor_list.builds:>5}/{2 * steps}")
     print()
     ns = sorted(results)
     for a, b in zip(ns, ns[1:]):

@@ -459,7 +459,13 @@ class LennardJones(Force):
 
     @property
     def skin(self):
+        """Verlet-list skin, in metres."""
         return self._list.skin
+
+    @property
+    def neighbor_list(self):
+        """The :class:`~particles.neighbors.VerletList` of the ``"cells"`` mode (``builds`` counts rebuilds)."""
+        return self._list
 
     def reset(self):
         """Forget the cached pair list (particles were added, removed or reordered)."""

@@ -329,13 +329,27 @@ def relax(system, h=0.05, tol=1e-8, max_steps=2000, method="auto"):
 
         # continuation: backward-Euler-like steps from rest with growing pseudo
         # time steps guide Newton to the equilibrium nearest the start, then a
-        # plain solve of F(x) = 0
+        # plain solve of F(x) = 0. A pseudo step whose solve fails is not
+        # taken: it is retried at half the length (large rotations of stiff
+        # springs defeat Newton when the step is too long).
         y, evaluations = X[free, 0].ravel().copy(), 0
-        for tau in list(h * 2.0 ** np.arange(12)) + [np.inf]:
+        tau, longest = h, h * 2.0**11
+        for _ in range(max_steps):  # a loop over pseudo time steps
             start = y.copy()
             sol = scipy.optimize.root(lambda z: net_force(z) - mass * (z - start) / (tau * tau * scale),
                                       start, method="hybr", tol=1e-12)
-            y, evaluations = sol.x, evaluations + sol.nfev
+            evaluations += sol.nfev
+            if sol.success:
+                y = sol.x
+                if tau == np.inf:
+                    break
+                tau = np.inf if tau >= longest else 2.0 * tau
+            elif tau == np.inf:
+                tau = longest  # not close enough for a plain solve: more pseudo steps first
+            elif tau > 1e-6 * h:
+                tau /= 2.0
+            else:
+                break
         # finite-difference Jacobians limit the attainable residual to about 1e-8
         if not sol.success or np.max(np.abs(net_force(y))) > max(tol, 1e-6):
             raise ConvergenceError(f"relax: Newton found no static equilibrium ({sol.message})")

@@ -264,8 +264,9 @@ class VerletList:
     cutoff : float
         Interaction range.
     skin : float
-        Extra margin, >= 0; 0 rebuilds at every call. About 10-20% of the
-        cutoff is typical.
+        Extra margin, >= 0. With 0 the list is rebuilt as soon as any
+        particle has moved at all (it is reused only for identical
+        positions). About 10-20% of the cutoff is typical.
     cells_per_cutoff : int
         Passed to :class:`CellGrid`.
 

@@ -256,10 +256,10 @@ def test_verlet_list_reused_and_still_exact():
     for step in range(10):
         np.testing.assert_allclose(lj(x), ref(x), atol=1e-10)
         x = x + rng.uniform(-0.02, 0.02, x.shape)
-    assert lj._list.builds == 1  # total motion < skin/2: never rebuilt
+    assert lj.neighbor_list.builds == 1  # total motion < skin/2: never rebuilt
     x = x + rng.uniform(-0.5, 0.5, x.shape)
     np.testing.assert_allclose(lj(x), ref(x), atol=1e-10)
-    assert lj._list.builds == 2
+    assert lj.neighbor_list.builds == 2
 
 
 def test_lennard_jones_bad_parameters():

@@ -127,6 +127,20 @@ def test_relax_finds_rest_and_rejects_bad_method():
         relax(c, method="euler")
 
 
+def test_relax_newton_finds_a_large_droop():
+    """Newton relaxation settles a soft hair with stiff segments that droops far beyond linear beam theory."""
+    from particles.massspring import hair
+
+    mu, L, EI = 0.05, 0.3, 0.002
+    h = hair(6, L, scaling="physical", linear_density=mu, stretch_modulus=1e3, bending_modulus=EI)
+    relax(h, method="newton")
+    F = h.total_force(h.X, 0.0)
+    assert np.abs(F[2:]).max() < 1e-9  # the free particles are at rest
+    droop = -h.X[-1, 0, 1]
+    assert 0.2 * L < droop < mu * 9.81 * L**4 / (8 * EI)  # large, and below the linear prediction
+    assert np.linalg.norm(h.X[-1, 0] - h.X[0, 0]) <= L * 1.001  # the hair does not get longer
+
+
 def test_implicit_steppers_check_their_input():
     c = small_cloth()
     with pytest.raises(ValueError, match="system must be a MassSpringSystem"):

@@ -100,6 +100,10 @@ def plot_discretization(study):
     axes[1].set_ylabel("bounce period (s)")
     axes[2].set_ylabel("largest stable step of symplectic Euler (s)")
     axes[2].set_xlabel("grid spacing dx (m)")
+    from matplotlib.ticker import NullFormatter
+
+    axes[2].xaxis.set_minor_formatter(NullFormatter())
+    axes[2].yaxis.set_minor_formatter(NullFormatter())
     for ax in axes[:2]:
         ax.set_xlabel("particles per side")
         ax.set_xticks(study["n"])
