@@ -223,6 +223,12 @@ class ParticleSystem:
         keep : ndarray of int, shape (n_left,)
             Old indices of the particles that remain, in order: particle
             ``keep[i]`` is now particle ``i``.
+
+        Notes
+        -----
+        Forces that store particle indices (springs) are not renumbered:
+        remove particles only from systems whose forces act on each particle
+        alone or find their pairs anew (gravity, fields, Lennard-Jones, boids).
         """
         which = np.asarray(which)
         if which.dtype == bool:
