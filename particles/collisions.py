@@ -344,6 +344,9 @@ class Collider:
             a_n = np.einsum("ij,ij->i", ah, n)
             resting = (a_n < 0) & (np.einsum("ij,ij->i", v_new, n) < -a_n * rest)
             ah[resting] -= a_n[resting, None] * n[resting]  # the surface carries the inward pull
+            if self.friction and resting.any():
+                ah[resting] -= _resting_friction(v_new[resting], ah[resting], n[resting], -a_n[resting],
+                                                 rest[resting], self.friction)
             tc = t0[hit] + s * dt[hit]
             mi = m[idx[hit], None]
             found.append(Contacts(idx[hit], tc, xc, n, mi * dv_n, mi * dv_t))
@@ -375,6 +378,43 @@ class Collider:
             return (H0 >= 0)
         D = path_speed(X0[:, 0], X0[:, 1], X1[:, 0], X1[:, 1], h)
         return maybe | ((H0 >= 0) & (H0 + H1 <= L * D * (1 + 1e-12) + 1e-15))
+
+    def stepper(self, step, m=1.0, pinned=()):
+        """Wrap a stepper so that every step ends with this collision fix.
+
+        The returned ``stepper(f, X, t, h)`` composes with other wrappers and
+        with the implicit mass-spring solvers, e.g. a cloth on a body with
+        Provot's constraint::
+
+            provot = ProvotConstraint.from_system(cloth)
+            step = collider.stepper(provot.stepper(symplectic_euler), m=cloth.m, pinned=cloth.pinned)
+            cloth.run(2.0, h, method=step)
+
+        Collisions come last, so that no free particle ends a step inside the
+        solid. The contacts of the latest step are kept in ``step.contacts``.
+
+        Parameters
+        ----------
+        step : callable
+            A stepper ``step(f, X, t, h)`` (a name of
+            :data:`particles.integrators.INTEGRATORS` is accepted too).
+        m : float or array_like, shape (n,)
+            Masses, in kg (for the reported impulses).
+        pinned : array_like of int or bool
+            Particles left untouched.
+        """
+        step = method_name(step, INTEGRATORS)
+
+        def with_collisions(f, X, t, h, **options):
+            X_new = step(f, X, t, h, **options)
+            X_new, with_collisions.contacts = self.collide(X, X_new, t, h, m=m, pinned=pinned)
+            return X_new
+
+        with_collisions.contacts = Contacts.empty(self.surface.d)
+        for attr in ("order", "explicit", "second_order_layout"):
+            setattr(with_collisions, attr, getattr(step, attr, None))
+        with_collisions.__name__ = f"collisions({getattr(step, '__name__', type(step).__name__)})"
+        return with_collisions
 
     def run(self, system, t_end, h, method="verlet", every=1):
         """Simulate a :class:`particles.ParticleSystem` with collisions after every step.
@@ -419,6 +459,24 @@ class Collider:
                 t_out.append(times[k])
                 X_out.append(system.state())
         return np.array(t_out), np.stack(X_out), Contacts.concatenate(found, system.d)
+
+
+def _resting_friction(v, a_t, n, pressure, tau, mu):
+    """Friction deceleration of particles resting on the surface for the rest of the step.
+
+    The surface pushes with ``m * pressure`` (the inward acceleration it
+    cancels), so Coulomb friction can remove up to ``mu * pressure * tau`` of
+    tangential velocity over the remaining time ``tau``, never reversing it:
+    static friction when that is enough, kinetic friction otherwise.
+
+    Returns the constant acceleration to subtract, shape (k, d).
+    """
+    v_t = v - np.einsum("ij,ij->i", v, n)[:, None] * n
+    v_end = v_t + a_t * tau[:, None]  # tangential velocity at the end of the step without friction
+    speed = np.sqrt(np.einsum("ij,ij->i", v_end, v_end))
+    removed = np.minimum(speed, mu * pressure * tau)
+    scale = np.divide(removed, speed * tau, out=np.zeros_like(speed), where=(speed > 0) & (tau > 0))
+    return scale[:, None] * v_end
 
 
 def _push_directions(surface, x, p):

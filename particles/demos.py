@@ -311,3 +311,6 @@ def write_demo(name, out="out", seconds=None, fps=None, seed=0, html=False, dpi=
         path.write_text(render.to_html(anim))
         paths.append(path)
     return data, paths
+
+
+from . import clothdemos  # noqa: E402,F401  (registers the mass-spring demos "cloth" and "drape")

@@ -1,0 +1,62 @@
+"""Mass-spring demos of ``particles demo``: a hanging cloth, and a cloth draped over a sphere.
+
+Registered in :data:`particles.demos.DEMOS` on import (``particles.demos``
+imports this module), like the effect demos: each returns data, drawing is
+separate.
+"""
+
+import numpy as np
+
+from .collisions import Collider, Plane, Sphere
+from .constraints import ProvotConstraint
+from .demos import DemoData, _circle, register
+from .integrators import symplectic_euler
+from .massspring import cloth
+
+__all__ = ["hanging_cloth", "draped_cloth"]
+
+
+def _record(system, step, seconds, fps, h_max):
+    """Run `system` with stepper `step` and steps of at most `h_max`, recording `fps` frames per second.
+
+    The step is shortened so that a whole number of steps fits in a frame.
+    Returns the frame times, the states and the step used.
+    """
+    every = int(np.ceil(1.0 / (fps * h_max)))
+    h = 1.0 / (fps * every)
+    t, X = system.run(system.t + seconds, h, method=step, every=every)
+    return t, X, h
+
+
+@register("cloth", "3D: a curtain pinned at two corners, falling and swinging in a gusty wind (Provot's constraint)",
+          preview=dict(seconds=2.0))
+def hanging_cloth(seconds=4.0, fps=12, seed=0):
+    c = cloth(16, 16, plane="horizontal", pins="top corners", scaling="physical", stretch_modulus=100.0,
+              damping=0.2, wind=[0.0, 2.0, 0.0])
+    provot = ProvotConstraint.from_system(c)
+    t, X, h = _record(c, provot.stepper(symplectic_euler), seconds, fps, 0.5 * c.max_stable_step())
+    strain = max(c.max_strain(Xk) for Xk in X)
+    return DemoData("cloth", "hanging cloth", t, list(X[:, :, 0]), velocities=list(X[:, :, 1]),
+                    springs=c.springs["structural"].indices,
+                    limits=[(-0.3, 1.3), (-0.8, 0.8), (-1.4, 0.2)], view=(15, -70), fps=fps,
+                    colors=[np.tile([0.85, 0.35, 0.1, 1.0], (c.n, 1))] * len(t), sizes=[np.full(c.n, 4.0)] * len(t),
+                    info={"largest strain": f"{100 * strain:.1f}%", "time step": f"{1e3 * h:.2f} ms"})
+
+
+@register("drape", "3D: a cloth falling onto a sphere and the floor (collisions with friction)",
+          preview=dict(seconds=2.0))
+def draped_cloth(seconds=3.0, fps=12, seed=0):
+    c = cloth(20, 20, width=1.2, height=1.2, plane="horizontal", origin=(-0.6, -0.6, 0.5), pins=None,
+              scaling="physical", stretch_modulus=200.0, damping=0.5)
+    ball, floor = Sphere([0.0, 0.0, 0.0], 0.4), Plane([0.0, 0.0, -0.4], [0.0, 0.0, 1.0])
+    collider = Collider(ball | floor, restitution=0.0, friction=0.5, method="project")
+    step = collider.stepper(ProvotConstraint.from_system(c).stepper(symplectic_euler), m=c.m, pinned=c.pinned)
+    t, X, h = _record(c, step, seconds, fps, 0.9 * c.max_stable_step())
+    inside = min(float(ball.H(Xk[:, 0]).min()) for Xk in X)
+    lines = [_circle([0, 0, z], np.sqrt(0.16 - z * z), axes=(0, 1), d=3) for z in (-0.3, -0.15, 0.0, 0.15, 0.3)]
+    lines += [_circle([0, 0, 0], 0.4, axes=(0, 2), d=3), _circle([0, 0, 0], 0.4, axes=(1, 2), d=3)]
+    return DemoData("drape", "cloth over a sphere", t, list(X[:, :, 0]), velocities=list(X[:, :, 1]),
+                    springs=c.springs["structural"].indices,
+                    lines=lines, limits=[(-0.8, 0.8), (-0.8, 0.8), (-0.45, 0.6)], view=(25, -60), fps=fps,
+                    colors=[np.tile([0.2, 0.45, 0.8, 1.0], (c.n, 1))] * len(t), sizes=[np.full(c.n, 3.0)] * len(t),
+                    info={"deepest point inside the sphere": f"{max(0.0, -inside):.1e} m", "time step": f"{1e3 * h:.2f} ms"})
