@@ -15,6 +15,14 @@ from .errors import ConvergenceError, SimulationDiverged
 from .integrators import INTEGRATORS, integrate
 from .system import ParticleSystem
 
+
+def check(exercise, notebook=None, **options):
+    """Run the public tests of `exercise` on your current notebook code (see :func:`particles.course.check.check`)."""
+    from .course.check import check as _check
+
+    return _check(exercise, notebook, **options)
+
+
 __version__ = "0.1.0"
 
 __all__ = [
@@ -23,6 +31,7 @@ __all__ = [
     "integrate",
     "SimulationDiverged",
     "ConvergenceError",
+    "check",
     "forces",
     "integrators",
     "neighbors",
