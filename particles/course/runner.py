@@ -178,6 +178,9 @@ def _exit_reason(returncode):
         return "stopped answering"
     if returncode >= 0:
         hint = " (a call to os._exit?); a function must return its result" if returncode == 0 else ""
+        if returncode == 1:
+            hint = (" (it probably replaced a function of Python or NumPy that the grader needs, "
+                    "or closed the worker's files)")
         return f"ended the worker process with exit status {returncode}{hint}"
     try:
         name = signal.Signals(-returncode).name
@@ -314,6 +317,8 @@ class Submission:
         if kind == "MemoryError":
             return (f"`{name}` ran out of memory{where} (the limit is {self.limits['memory_mb']} MiB); "
                     "it allocates far more than the problem needs")
+        if kind == "ReplacedBuiltins":
+            return f"`{name}` changed Python itself: {message}; the grader restored them and does not accept the result"
         if kind == "PermissionError" and "grader does not let" in message:
             return f"`{name}` did something the grader forbids{where}: {message}"
         if kind == "PermissionError" and "not allowed in this exercise" in message:

@@ -247,6 +247,18 @@ class _Server:
     def __init__(self, proto_in, proto_out):
         self.proto_in, self.proto_out = proto_in, proto_out
         self.namespace = {"__name__": "submission", "__builtins__": __builtins__}
+        import builtins
+
+        self.builtins = vars(builtins)
+        self.pristine = dict(self.builtins)  # student code may replace builtins the worker itself needs
+
+    def restore(self):
+        """Put back any built-in the student's code replaced; return their names."""
+        changed = [k for k, v in self.pristine.items() if self.builtins.get(k) is not v]
+        changed += [k for k in self.builtins if k not in self.pristine]
+        self.builtins.clear()
+        self.builtins.update(self.pristine)
+        return sorted(set(changed))
 
     def read_exactly(self, n):
         chunks, remaining = [], n
@@ -276,6 +288,7 @@ class _Server:
                     exec(compile(code, f"<{chunk['label']}>", "exec"), self.namespace)
                 finally:
                     _cancel_alarm()
+                    self.restore()
             except BaseException as error:  # the student's code may raise anything, even SystemExit
                 errors.append(dict(_describe(error), label=chunk["label"]))
         defined = sorted(k for k, v in self.namespace.items() if not k.startswith("__") and callable(v))
@@ -295,8 +308,13 @@ class _Server:
                 value = function(*args, **kwargs)
             finally:
                 _cancel_alarm()
+                changed = self.restore()
         except BaseException as error:
+            self.restore()
             return {"ok": False, "error": _describe(error), "seconds": time.perf_counter() - start}
+        if changed:
+            message = f"it replaced Python's built-in {', '.join(changed)}"
+            return {"ok": False, "error": {"type": "ReplacedBuiltins", "message": message, "where": ""}}
         import numpy as np
 
         def after(v):

@@ -12,7 +12,7 @@ import pytest
 import particles
 from particles.course.expect import expect_array
 from particles.course.registry import remote
-from particles.course.runner import GradingFailure
+from particles.course.runner import GradingFailure, describe_value
 from particles.forces import Damping, Gravity
 from particles.integrators import euler, midpoint
 
@@ -116,7 +116,7 @@ def _reference_run(f, X0, t0, h, n):
 
 def _check_run(got, f, X0, t0, h, n, call):
     if not isinstance(got, tuple) or len(got) != 2:
-        kind = type(got).__name__ if not isinstance(got, tuple) else f"a tuple of {len(got)} values"
+        kind = describe_value(got) if not isinstance(got, tuple) else f"a tuple of {len(got)} values"
         raise GradingFailure(f"{call} returned {kind}, expected the tuple (t, X)")
     t_ref, X_ref = _reference_run(f, X0, t0, h, n)
     expect_array(got[0], t_ref, f"the times t of {call}", rtol=1e-9)
