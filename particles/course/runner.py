@@ -353,6 +353,8 @@ class Submission:
         GradingFailure
             With one line saying what went wrong.
         """
+        if self.load_failure:
+            raise GradingFailure(self.load_failure)
         uses = self.code.forbidden_uses(name, self.forbidden)
         if uses:
             used, via = uses[0]
