@@ -83,3 +83,13 @@ def test_run_autograder_writes_a_result_even_when_grading_cannot_start(bundle, t
     subprocess.run([str(root / "source" / "run_autograder")], env=env, capture_output=True, timeout=60)
     results = json.loads((root / "results" / "results.json").read_text())
     assert results["score"] == 0 and "could not grade" in results["output"]
+
+
+def test_run_autograder_with_no_notebook(bundle, tmp_path):
+    """An empty submission scores 0 of 11 with a reason on every test."""
+    root = _autograder_tree(bundle, tmp_path / "autograder", "{}")
+    (root / "submission" / "my_warmup.ipynb").unlink()
+    (root / "submission" / "notes.txt").write_text("I forgot the notebook")
+    results = _run_autograder(root)
+    assert results["score"] == 0 and results["max_score"] == 11
+    assert all("no notebook" in t["output"] for t in results["tests"])

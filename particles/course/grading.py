@@ -1,14 +1,17 @@
 """The grading driver: ``particles grade SUBMISSION... --out DIR --jobs N``.
 
-Each (student, exercise) pair is graded by its own ``pytest`` process that
-runs ``tests/exercises/test_NN_topic.py`` with the plugin of
-:mod:`particles.course.plugin`; that process starts the worker that runs the
-student's code. So three processes stand between a submission and the
-gradebook: the worker (untrusted, limited, killed on a timeout), the pytest
-session (trusted tests comparing with the reference library) and this driver,
-which only reads JSON records. If a pytest session itself fails (it should
-not), every test of that exercise is recorded as failed with the reason, so
-every submission yields a record and the driver never stops on a submission.
+Notebooks of one exercise are graded in batches by ``pytest`` processes that
+run ``tests/exercises/test_NN_topic.py`` with the plugin of
+:mod:`particles.course.plugin`; for each notebook such a process starts a
+worker that runs the student's code. So three processes stand between a
+submission and the gradebook: the worker (untrusted, limited, killed on a
+timeout, one per notebook), the pytest session (trusted tests comparing with
+the reference library) and this driver, which only reads JSON records. If a
+pytest session stops early (it should not), the notebooks it had not finished
+are graded again, each in a session of its own; a test that still has no
+record is recorded as failed with the reason. So every submission yields a
+record and the driver never stops on a submission. ``--jobs N`` runs N
+sessions at a time.
 
 Submissions and students:
 
@@ -24,6 +27,7 @@ from ``--exercise``, which also overrides both.
 """
 
 import json
+import math
 import os
 import re
 import secrets
@@ -39,7 +43,7 @@ from .paths import exercise_tests, project_root
 from .reports import feedback_markdown, gradescope_results, write_gradebook, write_json
 from .runner import _library_parent
 
-__all__ = ["Unit", "find_submissions", "grade_unit", "grade", "catalog"]
+__all__ = ["Unit", "find_submissions", "grade_batch", "grade_unit", "grade", "catalog"]
 
 
 @dataclass
@@ -132,25 +136,67 @@ def catalog(root, exercise, public_only=False, python=None):
             raise RuntimeError(f"cannot collect the tests of {test_file}; run pytest on it to see why") from None
 
 
-def grade_unit(unit, root, *, seed=None, public_only=False, time_limit=None, memory_mb=None, private=(),
-               python=None, log=None, tests=None, timeout=900):
-    """Grade one notebook against its exercise's tests; never raises on a bad submission.
+def _result(unit, seed, data, status, tests, seconds):
+    records = list(data.get("tests", []))
+    if tests is not None:  # make sure every expected test has a record
+        seen = {r["test"] for r in records}
+        why = ("not run: grading of this notebook stopped early (pytest exit status "
+               f"{status}); the instructor has the log")
+        records += [dict(t, passed=False, reason=why, seed=None) for t in tests if t["test"] not in seen]
+    notes = []
+    for error in data.get("load_errors", []):
+        where = f" ({error['where']})" if error.get("where") else ""
+        notes.append(f"While loading your notebook, {error['label']}{where} raised "
+                     f"{error['type']}: {error['message']}")
+    for label, message in data.get("syntax_errors", []):
+        notes.append(f"{label} has a syntax error ({message}) and was not run")
+    if data.get("restarts", 1) > 1:
+        notes.append(f"The worker running your code was restarted {data['restarts'] - 1} time(s) "
+                     "after a timeout or a crash")
+    return {"student": unit.student, "exercise": unit.exercise, "notebook": str(unit.notebook), "seed": seed,
+            "seconds": round(data.get("seconds", seconds), 2), "tests": records, "notes": notes,
+            "grader_status": status, "complete": "seconds" in data}
+
+
+def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, memory_mb=None, private=(),
+                python=None, log=None, tests=None, timeout=None):
+    """Grade notebooks of one exercise in one pytest session; never raises on a bad submission.
+
+    Each notebook still gets its own worker; only the pytest process (and the
+    reference library it imports) is shared, which makes a batch several
+    times cheaper than one session per notebook.
+
+    Parameters
+    ----------
+    units : list of Unit
+        All of the same exercise.
+    seeds : list of int, optional
+        One per unit (default: new random seeds).
+    tests : list of dict, optional
+        The exercise's catalog (see :func:`catalog`): tests a notebook has no
+        record for are recorded as failed, "not run".
 
     Returns
     -------
-    dict
-        ``student``, ``exercise``, ``notebook``, ``seed``, ``seconds``,
-        ``tests`` (records), ``notes`` (lines about loading the notebook).
+    list of dict
+        Per unit: ``student``, ``exercise``, ``notebook``, ``seed``,
+        ``seconds``, ``tests`` (records), ``notes`` (lines about loading the
+        notebook), ``complete`` (every test has its own record).
     """
     root = Path(root)
-    seed = secrets.randbelow(2**31) if seed is None else int(seed)
-    test_file = exercise_tests(root)[unit.exercise]
+    if len({u.exercise for u in units}) != 1:
+        raise ValueError("a batch must hold notebooks of one exercise")
+    seeds = [secrets.randbelow(2**31) for _ in units] if seeds is None else [int(s) for s in seeds]
+    test_file = exercise_tests(root)[units[0].exercise]
+    timeout = timeout or 300 + 120 * len(units)
     start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="particles-grade-") as tmp:
-        results = Path(tmp) / "results" / "records.json"
-        results.parent.mkdir()
-        extra = ["--submission", str(Path(unit.notebook).resolve()), "--grading-results", str(results),
-                 "--grading-seed", str(seed)]
+        private_dir = Path(tmp) / "grader"
+        private_dir.mkdir()
+        batch, results = private_dir / "batch.json", private_dir / "records.json"
+        batch.write_text(json.dumps([{"id": str(k), "notebook": str(Path(u.notebook).resolve()), "seed": seed}
+                                     for k, (u, seed) in enumerate(zip(units, seeds))]))
+        extra = ["--grading-batch", str(batch), "--grading-results", str(results)]
         extra += ["--public-only"] if public_only else []
         extra += ["--time-limit", str(time_limit)] if time_limit else []
         extra += ["--memory-mb", str(memory_mb)] if memory_mb else []
@@ -166,33 +212,34 @@ def grade_unit(unit, root, *, seed=None, public_only=False, time_limit=None, mem
         if log is not None:
             Path(log).write_text(output)
         try:
-            data = json.loads(results.read_text())
-        except (OSError, ValueError):
+            data = {s["id"]: s for s in json.loads(results.read_text())["submissions"]}
+        except (OSError, ValueError, KeyError, TypeError):
             data = {}
-    records = data.get("tests", [])
-    if tests is None and (status not in (0, 1) or not records):
+    elapsed = time.perf_counter() - start
+    if tests is None and any("seconds" not in data.get(str(k), {}) for k in range(len(units))):
         try:
-            tests = catalog(root, unit.exercise, public_only, python)
+            tests = catalog(root, units[0].exercise, public_only, python)
         except RuntimeError:
             tests = []
-    if tests is not None:  # make sure every expected test has a record
-        seen = {r["test"] for r in records}
-        why = ("not run: grading of this notebook stopped early (pytest exit status "
-               f"{status}); the instructor has the log")
-        records += [dict(t, passed=False, reason=why) for t in tests if t["test"] not in seen]
-    notes = []
-    for error in data.get("load_errors", []):
-        where = f" ({error['where']})" if error.get("where") else ""
-        notes.append(f"While loading your notebook, {error['label']}{where} raised "
-                     f"{error['type']}: {error['message']}")
-    for label, message in data.get("syntax_errors", []):
-        notes.append(f"{label} has a syntax error ({message}) and was not run")
-    if data.get("restarts", 1) > 1:
-        notes.append(f"The worker running your code was restarted {data['restarts'] - 1} time(s) "
-                     "after a timeout or a crash")
-    return {"student": unit.student, "exercise": unit.exercise, "notebook": str(unit.notebook), "seed": seed,
-            "seconds": round(time.perf_counter() - start, 2), "tests": records, "notes": notes,
-            "grader_status": status}
+    return [_result(u, seed, data.get(str(k), {}), status, tests, elapsed / len(units))
+            for k, (u, seed) in enumerate(zip(units, seeds))]
+
+
+def grade_unit(unit, root, *, seed=None, **options):
+    """Grade one notebook (see :func:`grade_batch`); returns its result dict."""
+    return grade_batch([unit], root, seeds=None if seed is None else [seed], **options)[0]
+
+
+def _batches(units, jobs, largest=20):
+    """Split units into batches of one exercise, small enough to keep `jobs` processes busy."""
+    by_exercise = {}
+    for unit in units:
+        by_exercise.setdefault(unit.exercise, []).append(unit)
+    out = []
+    for group in by_exercise.values():
+        size = max(1, min(largest, math.ceil(len(group) / (3 * jobs))))
+        out += [group[k:k + size] for k in range(0, len(group), size)]
+    return out
 
 
 def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=None, time_limit=None,
@@ -253,23 +300,32 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     if out is not None:
         out = Path(out)
         (out / "logs").mkdir(parents=True, exist_ok=True)
-    catalogs = {name: catalog(root, name, public_only, python) for name in sorted({u.exercise for u in units})}
 
-    def work(unit):
-        log = out / "logs" / f"{unit.student}-{unit.exercise}.log" if out is not None else None
-        result = grade_unit(unit, root, seed=seed, public_only=public_only, time_limit=time_limit,
-                            memory_mb=memory_mb, private=private, python=python, log=log,
-                            tests=catalogs[unit.exercise])
+    def work(batch):
+        k = batches.index(batch)
+        log = out / "logs" / f"batch{k:03d}-{batch[0].exercise}.log" if out is not None else None
+        seeds = [seed if seed is not None else secrets.randbelow(2**31) for _ in batch]
+        results = grade_batch(batch, root, seeds=seeds, public_only=public_only, time_limit=time_limit,
+                              memory_mb=memory_mb, private=private, python=python, log=log)
+        if len(batch) > 1:  # a session that stopped early: grade its unfinished notebooks alone
+            for i, (unit, result) in enumerate(zip(batch, results)):
+                if not result["complete"]:
+                    retry_log = out / "logs" / f"{unit.student}-{unit.exercise}.log" if out is not None else None
+                    results[i] = grade_unit(unit, root, seed=seeds[i], public_only=public_only,
+                                            time_limit=time_limit, memory_mb=memory_mb, private=private,
+                                            python=python, log=retry_log)
         if progress is not None:
-            progress(result)
-        return result
+            for result in results:
+                progress(result)
+        return results
 
+    batches = _batches(units, jobs)
     with ThreadPoolExecutor(max_workers=jobs) as pool:
-        results = list(pool.map(work, units))
+        results = [r for batch_results in pool.map(work, batches) for r in batch_results]
     students = {}
     for result in results:
         students.setdefault(result["student"], []).append(result)
-    exercises = [name for name in tests if name in catalogs]
+    exercises = [name for name in tests if any(u.exercise == name for u in units)]
     if out is not None:
         for student, per_exercise in students.items():
             folder = out / student
@@ -278,6 +334,14 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
             (folder / "feedback.md").write_text(feedback_markdown(student, per_exercise))
         write_gradebook(out / "gradebook.csv", students, exercises)
     if gradescope is not None:
+        if not results and exercise is not None:  # nothing gradable was submitted: every test fails, saying why
+            why = "no notebook for this exercise was found in your submission" if not problems else problems[0]
+            tests_of = catalog(root, exercise, public_only, python)
+            results = [{"student": "submission", "exercise": exercise, "notebook": "", "seed": None, "seconds": 0.0,
+                        "tests": [dict(t, passed=False, reason=why) for t in tests_of], "notes": []}]
+        data = gradescope_results("submission", results, hidden_visibility)
+        if problems:
+            data["output"] = "\n".join([data["output"], *problems]).strip()
         Path(gradescope).parent.mkdir(parents=True, exist_ok=True)
-        write_json(gradescope, gradescope_results("submission", results, hidden_visibility))
+        write_json(gradescope, data)
     return {"students": students, "exercises": exercises, "problems": problems}

@@ -26,6 +26,7 @@ import numpy as np
 
 from .code import SubmissionCode, read_submission
 from .protocol import ProtocolError, Unsupported, read_frame, write_frame
+from .worker import BOOTSTRAP
 
 __all__ = ["GradingFailure", "Worker", "WorkerDied", "WorkerTimeout", "Submission", "DEFAULTS"]
 
@@ -57,6 +58,31 @@ class WorkerDied(RuntimeError):
         super().__init__(f"worker ended with exit status {returncode}")
 
 
+_MPL_CACHE = None
+
+
+def _matplotlib_cache():
+    """A grader-owned folder with Matplotlib's font list, built once by a trusted process.
+
+    Without it every worker would rebuild the font cache in its fresh scratch
+    folder, which takes seconds. Workers get a copy, never the folder itself,
+    so one submission cannot tamper with another's.
+    """
+    global _MPL_CACHE
+    if _MPL_CACHE is None:
+        folder = Path(tempfile.gettempdir()) / f"particles-grader-mplcache-{os.getuid()}"
+        if not list(folder.glob("fontlist*.json")):
+            folder.mkdir(parents=True, exist_ok=True)
+            env = dict(os.environ, MPLCONFIGDIR=str(folder), MPLBACKEND="Agg")
+            try:
+                subprocess.run([sys.executable, "-c", "import matplotlib.font_manager"], env=env,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=120)
+            except (OSError, subprocess.TimeoutExpired):
+                pass
+        _MPL_CACHE = sorted(folder.glob("fontlist*.json"))
+    return _MPL_CACHE
+
+
 def _library_parent():
     """The folder holding the ``particles`` package that the grader itself uses."""
     return str(Path(__file__).resolve().parents[2])
@@ -79,6 +105,9 @@ class Worker:
     def __init__(self, scratch, config, python=None, start_timeout=30.0):
         self.scratch = Path(scratch)
         self.scratch.mkdir(parents=True, exist_ok=True)
+        (self.scratch / ".matplotlib").mkdir(exist_ok=True)
+        for font_list in _matplotlib_cache():
+            shutil.copyfile(font_list, self.scratch / ".matplotlib" / font_list.name)
         self.config = dict(config, scratch=str(self.scratch))
         env = {
             "PATH": os.environ.get("PATH", os.defpath), "HOME": str(self.scratch), "TMPDIR": str(self.scratch),
@@ -87,7 +116,7 @@ class Worker:
             "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
         }
         self.process = subprocess.Popen(
-            [python or sys.executable, "-m", "particles.course.worker", str(self.scratch / "stdout.txt")],
+            [python or sys.executable, "-c", BOOTSTRAP, str(self.scratch / "stdout.txt")],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
             cwd=self.scratch, env=env, start_new_session=True,
         )

@@ -1,7 +1,7 @@
 """The worker process: runs one submission's code, away from the grader.
 
 Started by :class:`particles.course.runner.Worker` as
-``python -m particles.course.worker CAPTURE_FILE``. It talks to the grader over
+``python -c BOOTSTRAP CAPTURE_FILE`` (see :data:`BOOTSTRAP`). It talks to the grader over
 its original stdin/stdout with the frames of :mod:`particles.course.protocol`;
 before any student code runs it moves file descriptors 0, 1 and 2 away (stdin
 reads ``/dev/null``, stdout and stderr go to ``CAPTURE_FILE``), so whatever the
@@ -11,9 +11,10 @@ Set-up, in this order, from the first frame (the grader's configuration):
 
 1. import NumPy and the test-problem registry (the student's code may not
    need more; anything else it imports is read from the Python installation);
-2. replace the library functions the exercise forbids by tripwires that raise
-   ``PermissionError`` when used (the grader's syntax-tree check is the first
-   line of defence, this one catches dynamic look-ups);
+2. arrange for the library functions the exercise forbids to be replaced by
+   tripwires that raise ``PermissionError`` when used, as soon as their module
+   is imported (the grader's syntax-tree check is the first line of defence,
+   this one catches dynamic look-ups);
 3. resource limits (``resource.setrlimit``): address space (``memory_mb`` on
    top of what the worker uses at start), CPU time, size of written files, no
    core files;
@@ -36,6 +37,7 @@ import os
 import signal
 import sys
 import time
+import types
 
 __all__ = ["main"]
 
@@ -147,27 +149,111 @@ class _Tripwire:
         return f"<forbidden {self._name}>"
 
 
-def _install_tripwires(forbidden):
-    """Replace each forbidden dotted name (and its aliases inside the library) by a tripwire."""
-    import importlib
+class _Tripwires:
+    """Replaces forbidden library objects by tripwires as soon as their module is loaded.
 
-    targets = {}
-    for name, reason in forbidden.items():
-        module_name, _, attr = name.rpartition(".")
+    (It also makes the plotting modules of :data:`_LAZY` load lazily.) A meta-path finder: every ``particles`` module the submission imports is
+    loaded as usual, then the forbidden objects in it, and every alias of them
+    in the library's modules and their dicts (``INTEGRATORS``), are swapped for
+    tripwires. Modules nobody imports are never loaded, so a worker starts
+    with NumPy only.
+    """
+
+    def __init__(self, forbidden):
+        self.forbidden = dict(forbidden)
+        self.targets = {}  # id(original) -> (original, tripwire); the original is kept so its id stays unique
+        self.busy = False
+
+    def wire(self):
+        library = [m for n, m in list(sys.modules.items()) if n == "particles" or n.startswith("particles.")]
+        for name, reason in self.forbidden.items():
+            module_name, _, attr = name.rpartition(".")
+            module = sys.modules.get(module_name)
+            value = vars(module).get(attr) if module is not None else None
+            if value is not None and not isinstance(value, _Tripwire) and id(value) not in self.targets:
+                self.targets[id(value)] = (value, _Tripwire(name, reason))
+        if not self.targets:
+            return
+        for module in library:  # a loop over modules and their attributes, not over particles
+            for key, value in list(vars(module).items()):
+                if id(value) in self.targets:
+                    setattr(module, key, self.targets[id(value)][1])
+                elif type(value) is dict and not key.startswith("__"):
+                    for k, v in list(value.items()):
+                        if id(v) in self.targets:
+                            value[k] = self.targets[id(v)][1]
+
+    def find_spec(self, fullname, path=None, target=None):
+        if self.busy or not (fullname.startswith("particles.") or fullname in _LAZY):
+            return None
+        self.busy = True
         try:
-            module = importlib.import_module(module_name)
-            targets[id(getattr(module, attr))] = _Tripwire(name, reason)
-        except (ImportError, AttributeError):
-            continue
-    library = [m for n, m in list(sys.modules.items()) if n == "particles" or n.startswith("particles.")]
-    for module in library:  # a loop over modules and their attributes, not over particles
-        for key, value in list(vars(module).items()):
-            if id(value) in targets:
-                setattr(module, key, targets[id(value)])
-            elif isinstance(value, dict) and not key.startswith("__"):
-                for k, v in list(value.items()):
-                    if id(v) in targets:
-                        value[k] = targets[id(v)]
+            for finder in sys.meta_path:
+                if finder is self or not hasattr(finder, "find_spec"):
+                    continue
+                spec = finder.find_spec(fullname, path, target)
+                if spec is not None:
+                    break
+            else:
+                return None
+        finally:
+            self.busy = False
+        if spec.loader is None:
+            return spec
+        if fullname in _LAZY:
+            import importlib.util
+
+            spec.loader = importlib.util.LazyLoader(spec.loader)
+        else:
+            spec.loader = _WiringLoader(spec.loader, self)
+        return spec
+
+
+class _WiringLoader:
+    """A module loader that wires tripwires after the module ran."""
+
+    def __init__(self, loader, wires):
+        self._loader, self._wires = loader, wires
+
+    def create_module(self, spec):
+        return self._loader.create_module(spec)
+
+    def exec_module(self, module):
+        self._loader.exec_module(module)
+        self._wires.wire()
+
+    def __getattr__(self, name):  # get_source, get_filename, ... for tracebacks and inspect
+        return getattr(self._loader, name)
+
+
+_WIRES = None
+
+_LAZY = {"matplotlib.pyplot", "matplotlib.animation", "IPython.display"}
+"""Modules a notebook imports for its plots: loaded only if the graded code uses them.
+(``import matplotlib.pyplot as plt`` costs about a second; the grader never draws.)"""
+
+
+class _LazyPackage(types.ModuleType):
+    """The ``particles`` package, initialised on first use (the worker itself needs two modules)."""
+
+    def __getattr__(self, name):
+        if name.startswith("__") and name.endswith("__"):
+            raise AttributeError(name)
+        self.__class__ = types.ModuleType
+        self.__spec__.loader.exec_module(self)
+        if _WIRES is not None:
+            _WIRES.wire()
+        return getattr(self, name)
+
+
+BOOTSTRAP = (
+    "import sys, importlib.util as u; spec = u.find_spec('particles'); "
+    "sys.modules['particles'] = u.module_from_spec(spec); "
+    "from particles.course.worker import run; run(sys.argv[1:])"
+)
+"""The worker's command line (``python -c BOOTSTRAP CAPTURE_FILE``): it imports the
+worker without running ``particles/__init__.py``, which would load SciPy and
+the whole library before any student code asks for it."""
 
 
 def _memory_in_use():
@@ -383,7 +469,10 @@ def main(argv=None):
         config = read_frame(server.read_exactly)
     except EOFError:
         return 0
-    _install_tripwires(config.get("forbidden", {}))
+    global _WIRES
+    _WIRES = _Tripwires(config.get("forbidden", {}))
+    sys.meta_path.insert(0, _WIRES)
+    _WIRES.wire()
     _set_limits(config.get("memory_mb"), config.get("cpu_seconds"), config.get("file_mb"))
     scratch = config["scratch"]
     os.chdir(scratch)
@@ -400,7 +489,20 @@ def main(argv=None):
     return 0
 
 
+def run(argv):
+    """Run :func:`main` and end the process without running the submission's exit handlers."""
+    package = sys.modules.get("particles")
+    if package is not None and type(package) is types.ModuleType and not hasattr(package, "ParticleSystem"):
+        package.__class__ = _LazyPackage
+    try:
+        code = main(argv)
+    except BaseException:
+        code = 1
+    try:
+        sys.stdout.flush()
+    finally:
+        os._exit(code)
+
+
 if __name__ == "__main__":
-    code = main()
-    sys.stdout.flush()
-    os._exit(code)
+    run(sys.argv[1:])
