@@ -41,7 +41,7 @@ from pathlib import Path
 
 from .paths import exercise_tests, project_root
 from .reports import feedback_markdown, gradescope_results, write_gradebook, write_json
-from .runner import _library_parent
+from .process import library_parent
 
 __all__ = ["Unit", "find_submissions", "grade_batch", "grade_unit", "grade", "catalog"]
 
@@ -114,7 +114,7 @@ def _pytest_command(python, root, test_file, extra):
 
 def _environment(root):
     env = dict(os.environ)
-    parent = _library_parent()
+    parent = library_parent()
     env["PYTHONPATH"] = parent + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     env["PARTICLES_COURSE_ROOT"] = str(root)
     env["PYTHONDONTWRITEBYTECODE"] = "1"
