@@ -59,3 +59,14 @@ def test_check_outside_a_notebook_needs_a_path():
         particles.check("00_warmup", root=ROOT)
     with pytest.raises(ValueError, match="unknown exercise"):
         particles.check("99_none", root=ROOT)
+
+
+def test_one_notebook_per_student_and_exercise(tmp_path, capsys):
+    """Two notebooks of one exercise from one student: the exactly named one is graded, the other reported."""
+    folder = tmp_path / "subs" / "cy"
+    folder.mkdir(parents=True)
+    shutil.copy(ROOT / "solutions" / "00_warmup.ipynb", folder / "00_warmup.ipynb")
+    shutil.copy(ROOT / "exercises" / "00_warmup.ipynb", folder / "old_00_warmup.ipynb")
+    assert main(["grade", str(tmp_path / "subs"), "--public", "--root", str(ROOT)]) == 0
+    captured = capsys.readouterr()
+    assert "5/5" in captured.out and "several notebooks for 00_warmup" in captured.err

@@ -23,7 +23,9 @@ Submissions and students:
 
 The exercise of a notebook is read from its metadata (written by
 ``particles release``), else from its file name (``..._00_warmup...``), else
-from ``--exercise``, which also overrides both.
+from ``--exercise``, which also overrides both. A student with several
+notebooks of one exercise gets one graded (the one named exactly
+``NN_topic.ipynb``, else the newest); the others are reported.
 """
 
 import json
@@ -75,6 +77,12 @@ def _student_name(text):
     return re.sub(r"[^\w.@+-]+", "_", text).strip("_") or "submission"
 
 
+def _preference(unit):
+    """Which of two notebooks of one student and exercise to grade: the exact name, then the newest."""
+    path = Path(unit.notebook)
+    return (path.name == f"{unit.exercise}.ipynb", path.stat().st_mtime)
+
+
 def find_submissions(paths, exercises, exercise=None):
     """Expand notebooks and folders into :class:`Unit` s and a list of problems.
 
@@ -104,7 +112,17 @@ def find_submissions(paths, exercises, exercise=None):
                 problems.append(f"{nb}: cannot tell which exercise this is; pass --exercise")
                 continue
             units.append(Unit(_student_name(student), name, nb))
-    return units, problems
+    chosen = {}
+    for unit in units:  # one notebook per student and exercise: the exact name, else the newest
+        key = (unit.student, unit.exercise)
+        if key not in chosen:
+            chosen[key] = unit
+            continue
+        keep, drop = sorted([chosen[key], unit], key=_preference, reverse=True)
+        chosen[key] = keep
+        problems.append(f"{drop.notebook}: {unit.student} has several notebooks for {unit.exercise}; "
+                        f"graded {keep.notebook}")
+    return list(chosen.values()), problems
 
 
 def _pytest_command(python, root, test_file, extra):
@@ -237,7 +255,9 @@ def _batches(units, jobs, largest=20):
         by_exercise.setdefault(unit.exercise, []).append(unit)
     out = []
     for group in by_exercise.values():
-        size = max(1, min(largest, math.ceil(len(group) / (3 * jobs))))
+        # about three batches per job for balance, and never fewer than six batches, so that the
+        # cost of a start-up per batch does not depend on --jobs 1 or 2
+        size = max(1, min(largest, math.ceil(len(group) / (3 * max(jobs, 2)))))
         out += [group[k:k + size] for k in range(0, len(group), size)]
     return out
 
