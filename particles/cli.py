@@ -23,8 +23,8 @@ def _root(args):
 def _release(args):
     from .course.release import ReleaseError, release, write_bundle
 
-    root = _root(args)
     try:
+        root = _root(args)
         if args.check:
             problems = release(root, check=True)
             for problem in problems:
