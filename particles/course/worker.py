@@ -21,7 +21,8 @@ the walls themselves live in :mod:`particles.course.sandbox`:
    core files;
 4. change into the scratch directory and install an audit hook
    (:func:`sys.addaudithook`, which cannot be removed) that refuses: reading
-   the grader's private paths (the project, tests, solutions, results), writing
+   the grader's private paths (the project, tests, solutions, results, and
+   ``/proc`` of other processes, e.g. the grader's memory), writing
    outside the scratch directory, starting processes, sockets, signals to other
    processes, ``ctypes``, and raising resource limits.
 
@@ -248,7 +249,9 @@ def main(argv=None):
     allow = [os.path.dirname(os.path.dirname(os.path.abspath(__file__)))]  # the library itself
     allow += [sys.prefix, sys.base_prefix, sys.exec_prefix] + list(site.getsitepackages())
     allow += [os.path.dirname(os.__file__)]
-    policy = sandbox.Policy(scratch, config.get("deny", []), allow)
+    # /proc of other processes would show the grader's memory and environment; its own is fine
+    allow += [f"/proc/{os.getpid()}", "/proc/meminfo", "/proc/cpuinfo"]
+    policy = sandbox.Policy(scratch, list(config.get("deny", [])) + ["/proc"], allow)
     sys.addaudithook(policy)  # from here on, until the process ends
     write_frame(proto_out, {"ok": True, "pid": os.getpid()})
     server.serve()
