@@ -90,6 +90,17 @@ def euler_step(f, X, t, h):
                   "test_run_circle": "ended the worker process"},
         "passes": ["test_total_force_three_particles"],
     },
+    "crashes_the_interpreter": {
+        "replace": {"total_force": """
+import faulthandler
+
+def total_force(x, v, m, g, d):
+    faulthandler._sigsegv()        # a segmentation fault, as a bug in compiled code would cause
+    return m[:, None] * g - d * v
+"""},
+        "fails": {"test_total_force_three_particles": "crashed the worker process with SIGSEGV"},
+        "passes": EULER_PUBLIC + ["test_run_circle"],
+    },
     "raises_keyboard_interrupt": {
         "replace": {"euler_step": """
 def euler_step(f, X, t, h):
