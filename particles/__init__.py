@@ -23,6 +23,14 @@ from .flocking import Flock
 from .integrators import INTEGRATORS, integrate
 from .system import ParticleSystem
 
+
+def check(exercise, notebook=None, **options):
+    """Run the public tests of `exercise` on your current notebook code (see :func:`particles.course.check.check`)."""
+    from .course.check import check as _check
+
+    return _check(exercise, notebook, **options)
+
+
 __version__ = "0.1.0"
 
 __all__ = [
@@ -34,6 +42,7 @@ __all__ = [
     "Collider",
     "ParticleEffect",
     "Flock",
+    "check",
     "constraints",
     "forces",
     "implicit",

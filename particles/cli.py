@@ -1,7 +1,8 @@
-"""The ``particles`` command line."""
+"""The ``particles`` command line: the tour, demos, studies, the course site, and the course tools."""
 
 import argparse
 import sys
+from pathlib import Path
 
 __all__ = ["main"]
 
@@ -36,6 +37,91 @@ def _site(args):
     from .site import build_site
 
     build_site(args.out, args.lectures, timeout=args.timeout)
+    return 0
+
+
+def _root(args):
+    from .course.paths import project_root
+
+    return Path(args.root).resolve() if args.root else project_root()
+
+
+def _release(args):
+    from .course.release import ReleaseError, release, write_bundle
+
+    try:
+        root = _root(args)
+        if args.check:
+            problems = release(root, check=True)
+            for problem in problems:
+                print(f"out of date: {problem}")
+            if problems:
+                print("run `particles release` to regenerate exercises/ from solutions/", file=sys.stderr)
+                return 1
+            print("exercises/ is up to date with solutions/")
+            return 0
+        if args.bundle:
+            files = write_bundle(root, args.bundle)
+            print(f"wrote the student bundle: {len(files)} files in {args.bundle}")
+            return 0
+        written = release(root)
+        for name in written:
+            print(f"wrote {name}")
+        if not written:
+            print("exercises/ is up to date with solutions/")
+        return 0
+    except (ReleaseError, ValueError) as error:
+        print(f"particles release: {error}", file=sys.stderr)
+        return 2
+
+
+def _grade(args):
+    from .course.grading import grade
+    from .course.reports import score_of
+
+    def progress(result):
+        score, top = score_of(result["tests"])
+        print(f"  graded {result['student']:<24} {result['exercise']:<16} {score:>5g} / {top:<5g}"
+              f" ({result['seconds']:.1f} s)", flush=True)
+
+    try:
+        summary = grade(
+            args.submissions, args.out, jobs=args.jobs, exercise=args.exercise, public_only=args.public,
+            seed=args.seed, time_limit=args.time_limit, memory_mb=args.memory_mb, root=_root(args),
+            private=args.private, hidden_visibility=args.hidden_visibility, gradescope=args.gradescope,
+            progress=progress,
+        )
+    except ValueError as error:
+        print(f"particles grade: {error}", file=sys.stderr)
+        return 2
+    for problem in summary["problems"]:
+        print(f"not graded: {problem}", file=sys.stderr)
+    exercises = summary["exercises"]
+    if summary["students"]:
+        print()
+        print(f"{'student':<24}" + "".join(f"{e:>14}" for e in exercises) + f"{'total':>12}")
+        for student, results in sorted(summary["students"].items()):
+            by = {r["exercise"]: score_of(r["tests"]) for r in results}
+            cells = "".join(f"{(f'{by[e][0]:g}/{by[e][1]:g}' if e in by else '-'):>14}" for e in exercises)
+            total = sum(s for s, _ in by.values()), sum(m for _, m in by.values())
+            print(f"{student:<24}{cells}{f'{total[0]:g}/{total[1]:g}':>12}")
+    if args.out:
+        print(f"\ngradebook: {Path(args.out) / 'gradebook.csv'}; per student: results.json and feedback.md")
+    if not summary["students"] and not args.gradescope:
+        print("particles grade: no notebooks were graded", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _gradescope_bundle(args):
+    from .course.gradescope import write_bundle
+
+    try:
+        names = write_bundle(_root(args), args.out, exercise=args.exercise)
+    except ValueError as error:
+        print(f"particles gradescope-bundle: {error}", file=sys.stderr)
+        return 2
+    print(f"wrote {args.out}: {len(names)} files (setup.sh, run_autograder, the library and the exercise tests)")
     return 0
 
 
@@ -74,6 +160,35 @@ def build_parser():
     site.add_argument("--lectures", default="lectures", help="folder of NN_topic.ipynb lectures")
     site.add_argument("--timeout", type=float, default=600, help="seconds allowed per cell")
     site.set_defaults(run=_site)
+
+    release = sub.add_parser("release", help="generate exercises/ from the masters in solutions/")
+    release.add_argument("--check", action="store_true", help="only check that exercises/ is up to date")
+    release.add_argument("--bundle", metavar="DIR", help="write what students receive into DIR (new or empty)")
+    release.add_argument("--root", help="the course folder (default: found from the current directory)")
+    release.set_defaults(run=_release)
+
+    grade = sub.add_parser("grade", help="grade notebooks (files or folders) with the exercise tests")
+    grade.add_argument("submissions", nargs="+", metavar="SUBMISSION", help="a notebook or a folder of them")
+    grade.add_argument("--out", help="write gradebook.csv, <student>/results.json and feedback.md here")
+    grade.add_argument("--jobs", type=int, default=1, help="notebooks graded in parallel (default 1)")
+    grade.add_argument("--exercise", help="grade every notebook as this exercise")
+    grade.add_argument("--public", action="store_true", help="run only the public tests (what students run)")
+    grade.add_argument("--seed", type=int, help="seed of the hidden tests (default: random, recorded)")
+    grade.add_argument("--time-limit", type=float, help="seconds per call of student code (default 5)")
+    grade.add_argument("--memory-mb", type=int, help="memory the student code may use, MiB (default 1024)")
+    grade.add_argument("--private", action="append", default=[], help="another path submissions may not read")
+    grade.add_argument("--gradescope", metavar="FILE", help="also write one combined Gradescope results.json")
+    grade.add_argument("--hidden-visibility", default="after_published",
+                       choices=["hidden", "after_due_date", "after_published", "visible"],
+                       help="Gradescope visibility of hidden tests (default after_published)")
+    grade.add_argument("--root", help="the course folder (default: found from the current directory)")
+    grade.set_defaults(run=_grade)
+
+    bundle = sub.add_parser("gradescope-bundle", help="write the Gradescope autograder zip")
+    bundle.add_argument("--out", default="autograder.zip", help="the zip to write (default autograder.zip)")
+    bundle.add_argument("--exercise", help="grade every submitted notebook as this exercise")
+    bundle.add_argument("--root", help="the course folder (default: found from the current directory)")
+    bundle.set_defaults(run=_gradescope_bundle)
     return parser
 
 

@@ -14,7 +14,15 @@ import numpy as np
 
 from ._checks import as_float_array, nonnegative_number, positive_number
 
-__all__ = ["Problem", "harmonic_oscillator", "circle", "projectile_drag", "PROBLEMS", "get_problem"]
+__all__ = [
+    "Problem",
+    "harmonic_oscillator",
+    "forced_oscillator",
+    "circle",
+    "projectile_drag",
+    "PROBLEMS",
+    "get_problem",
+]
 
 
 @dataclass(frozen=True)
@@ -71,6 +79,58 @@ def harmonic_oscillator(omega=1.0, x0=1.0, v0=0.0, t1=5.0):
     return Problem("harmonic_oscillator", f, exact(0.0), 0.0, float(t1), exact, True)
 
 
+def forced_oscillator(omega=2.0, amplitude=1.0, frequency=1.0, x0=1.0, v0=0.0, t1=5.0):
+    """A driven oscillator ``x'' = -omega^2 x + A cos(Omega t)``, layout (1, 2, 1).
+
+    The right-hand side depends on the time ``t``, so a stepper that evaluates
+    ``f`` at the wrong time is caught. It applies to any state of shape
+    ``(n, 2, d)``: every coordinate is an independent driven oscillator.
+
+    Parameters
+    ----------
+    omega : float
+        Natural angular frequency ``omega``, in rad/s, > 0.
+    amplitude : float
+        Driving acceleration ``A``, in m/s^2.
+    frequency : float
+        Driving angular frequency ``Omega``, in rad/s, > 0, different from `omega`.
+    x0, v0 : float
+        Initial position (m) and velocity (m/s).
+    t1 : float
+        End time, in seconds.
+
+    Notes
+    -----
+    Exact solution, with ``B = A / (omega^2 - Omega^2)``:
+    ``x = (x0 - B) cos(omega t) + v0/omega sin(omega t) + B cos(Omega t)``.
+
+    Examples
+    --------
+    >>> p = forced_oscillator(omega=2.0, amplitude=1.0, frequency=1.0)
+    >>> bool(abs(p.f(p.exact(0.3), 0.3)[0, 1, 0] - (-4 * p.exact(0.3)[0, 0, 0] + np.cos(0.3))) < 1e-12)
+    True
+    """
+    w = positive_number(omega, "omega", "rad/s")
+    W = positive_number(frequency, "frequency", "rad/s")
+    A = float(as_float_array(amplitude, "amplitude", ndim=0))
+    if abs(w - W) <= 1e-6 * w:
+        raise ValueError(
+            f"frequency must differ from omega (resonance has no bounded solution), got {W!r} and {w!r}"
+        )
+    x0, v0 = float(x0), float(v0)
+    B = A / (w**2 - W**2)
+
+    def f(X, t):
+        return np.stack([X[:, 1], -(w**2) * X[:, 0] + A * np.cos(W * t)], axis=1)
+
+    def exact(t):
+        x = (x0 - B) * np.cos(w * t) + v0 / w * np.sin(w * t) + B * np.cos(W * t)
+        v = -(x0 - B) * w * np.sin(w * t) + v0 * np.cos(w * t) - B * W * np.sin(W * t)
+        return np.array([[[x], [v]]])
+
+    return Problem("forced_oscillator", f, exact(0.0), 0.0, float(t1), exact, True)
+
+
 def circle(X0=(1.0, 0.0), t1=5.0):
     """The lecture's circle field ``f(x, y) = (-y, x)``: rotation at unit speed.
 
@@ -114,6 +174,7 @@ def projectile_drag(g=9.81, c=0.5, v0=(3.0, 8.0), t1=1.5):
 
 PROBLEMS = {
     "harmonic_oscillator": harmonic_oscillator,
+    "forced_oscillator": forced_oscillator,
     "circle": circle,
     "projectile_drag": projectile_drag,
 }

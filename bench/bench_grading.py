@@ -1,0 +1,77 @@
+"""Grading throughput: 50 submissions with --jobs 1 and with --jobs 2.
+
+Each submission is graded by its own pytest process and worker, so grading is
+embarrassingly parallel; on a 2-core machine two jobs should approach a 2x
+speed-up. The 50 notebooks are a mix from the grader's corpus (correct
+variants, the master, the stub and quick-failing wrong answers; no timeouts,
+which would measure sleeping rather than grading).
+
+The machine is shared: the script interleaves the two settings, keeps the
+best of each, and prints the CPU time of the graders so that a low speed-up
+caused by load elsewhere can be told from one caused by the grader.
+
+Run: .venv/bin/python bench/bench_grading.py [--n 50] [--repeat 2]
+"""
+
+import argparse
+import itertools
+import json
+import os
+import resource
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests" / "grader"))
+
+import corpus  # noqa: E402
+
+from particles.course.grading import grade  # noqa: E402
+
+QUICK = ["euler_as_midpoint", "wrong_shape", "returns_nan", "mutates_input", "calls_sys_exit",
+         "calls_the_library_stepper", "hard_codes_public_answers", "wrong_damping_sign", "run_off_by_one"]
+
+
+def make_submissions(folder, n):
+    cases = dict(corpus.REJECTED, **corpus.CORRECT)
+    names = list(corpus.CORRECT) + QUICK + ["master", "released_stub"]
+    texts = {"master": corpus.MASTER.read_text(), "released_stub": corpus.STUB.read_text()}
+    for k, name in zip(range(n), itertools.cycle(names)):
+        text = texts.get(name) or json.dumps(corpus.build(cases[name]))
+        (folder / f"student{k:03d}_00_warmup.ipynb").write_text(text)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--n", type=int, default=50, help="number of submissions (default 50)")
+    parser.add_argument("--repeat", type=int, default=2, help="runs of each setting, interleaved (default 2)")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp) / "subs"
+        folder.mkdir()
+        make_submissions(folder, args.n)
+        wall, cpu = {1: [], 2: []}, {1: [], 2: []}
+        load = os.getloadavg()[0]
+        for run in range(args.repeat):  # interleaved, so that a burst of load elsewhere hits both settings
+            for jobs in (1, 2):
+                before = resource.getrusage(resource.RUSAGE_CHILDREN)
+                start = time.perf_counter()
+                summary = grade([folder], Path(tmp) / f"out{jobs}-{run}", jobs=jobs, seed=1, time_limit=2.0,
+                                root=ROOT)
+                wall[jobs].append(time.perf_counter() - start)
+                after = resource.getrusage(resource.RUSAGE_CHILDREN)
+                cpu[jobs].append(after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
+                assert len(summary["students"]) == args.n
+        print(f"{args.n} submissions of 00_warmup, best of {args.repeat} runs; load average before: {load:.2f}, "
+              f"after: {os.getloadavg()[0]:.2f}")
+        print(f"{'jobs':>6}{'wall s':>10}{'per submission':>16}{'CPU s':>10}")
+        for jobs in (1, 2):
+            best = min(wall[jobs])
+            print(f"{jobs:>6}{best:>10.1f}{best / args.n:>15.2f}s{min(cpu[jobs]):>10.1f}")
+        print(f"speed-up of --jobs 2 over --jobs 1: x{min(wall[1]) / min(wall[2]):.2f}")
+
+
+if __name__ == "__main__":
+    main()

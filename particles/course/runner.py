@@ -1,0 +1,283 @@
+"""The grader's side of a worker: start it, load a submission, call its functions.
+
+:class:`Submission` is what an exercise test sees (as the ``student`` fixture)::
+
+    X_new = student.call("euler_step", remote("circle"), X, 0.0, 0.1)
+
+Every way a call can go wrong becomes a :class:`GradingFailure` (an
+``AssertionError``, so pytest records a failed test) with one line the student
+can act on: the function is missing or uses a forbidden library call, it
+raised, it ran past its time limit, it ended or crashed the worker, or it
+returned something the protocol cannot carry. After a timeout or a crash the
+worker is killed and the next call starts a fresh one.
+"""
+
+import shutil
+import signal
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .code import SubmissionCode, read_submission
+from .process import Worker, WorkerDied, WorkerTimeout
+from .protocol import ProtocolError, Unsupported
+
+__all__ = ["GradingFailure", "Submission", "DEFAULTS", "describe_value"]
+
+DEFAULTS = {
+    "time_limit": 5.0,       # seconds of wall-clock time per call
+    "load_time_limit": 10.0, # seconds per kept statement when loading the notebook
+    "memory_mb": 1024,       # address space the submission may add to the worker's, MiB
+    "cpu_seconds": 600,      # CPU time of one worker, a backstop if the grader died
+    "file_mb": 16,           # largest file the submission may write in its scratch folder, MiB
+}
+"""Default limits of a worker (all settable per grading run; time limits per test too)."""
+
+_GRACE = 2.0  # seconds after a soft time limit before the worker is killed
+
+
+class GradingFailure(AssertionError):
+    """A test failed for a reason the student can act on (``str()`` is one line)."""
+
+
+def _exit_reason(returncode):
+    if returncode is None:
+        return "stopped answering"
+    if returncode >= 0:
+        hint = " (a call to os._exit?); a function must return its result" if returncode == 0 else ""
+        if returncode == 1:
+            hint = (" (it probably replaced a function of Python or NumPy that the grader needs, "
+                    "or closed the worker's files)")
+        return f"ended the worker process with exit status {returncode}{hint}"
+    try:
+        name = signal.Signals(-returncode).name
+    except ValueError:
+        name = f"signal {-returncode}"
+    hints = {
+        "SIGKILL": " (killed: probably out of memory)",
+        "SIGXCPU": " (its CPU time limit was exceeded)",
+        "SIGSEGV": " (a crash in compiled code, or recursion far too deep)",
+    }
+    return f"crashed the worker process with {name}{hints.get(name, '')}"
+
+
+def _where(error):
+    return f" at {error['where']}" if error.get("where") else ""
+
+
+class Submission:
+    """A submission's code, run in a worker on demand; the tests' handle on it.
+
+    Parameters
+    ----------
+    source : path or SubmissionCode
+        A notebook file, or code already analysed.
+    forbidden : dict, optional
+        Dotted library name -> why it is forbidden, e.g.
+        ``{"particles.integrators.euler": "it is the step you are asked to write"}``.
+    deny : sequence of path, optional
+        Paths the submission may not read (solutions, tests, results).
+    time_limit, load_time_limit, memory_mb, cpu_seconds, file_mb : optional
+        Limits, see :data:`DEFAULTS`.
+    scratch : path, optional
+        Parent of the workers' scratch folders (default: a new temporary folder).
+
+    Attributes
+    ----------
+    code : SubmissionCode
+    restarts : int
+        How many workers were started (1 when nothing went wrong).
+    last : dict
+        Details of the last successful call: ``seconds``, and ``calls``
+        (argument position -> how often the student's code called that
+        registry function).
+    """
+
+    def __init__(self, source, forbidden=None, deny=(), scratch=None, python=None, **limits):
+        self.code = source if isinstance(source, SubmissionCode) else read_submission(source)
+        self.forbidden = dict(forbidden or {})
+        self.deny = [str(p) for p in deny]
+        self.limits = dict(DEFAULTS, **{k: v for k, v in limits.items() if v is not None})
+        self._own_scratch = scratch is None
+        self.scratch = Path(tempfile.mkdtemp(prefix="particles-grade-") if scratch is None else scratch)
+        self.python = python
+        self.worker = None
+        self.restarts = 0
+        self.load_errors = []
+        self.load_failure = None
+        self.last = {}
+
+    # -- the worker ------------------------------------------------------------------
+    def _start(self):
+        config = {
+            "memory_mb": self.limits["memory_mb"], "cpu_seconds": self.limits["cpu_seconds"],
+            "file_mb": self.limits["file_mb"], "deny": self.deny, "forbidden": self.forbidden,
+        }
+        self.restarts += 1
+        scratch = self.scratch / f"worker-{self.restarts}"
+        if scratch.exists():
+            shutil.rmtree(scratch, ignore_errors=True)
+        self.worker = Worker(scratch, config, python=self.python)
+        chunks = [{"label": c.label, "line": c.line, "source": c.source} for c in self.code.chunks]
+        limit = float(self.limits["load_time_limit"])
+        try:
+            reply = self.worker.request({"op": "load", "chunks": chunks, "timeout": limit}, limit + 5.0 + _GRACE)
+        except WorkerTimeout:
+            self.load_failure = f"loading your notebook did not finish within {limit:g} s per statement"
+            raise GradingFailure(self.load_failure) from None
+        except WorkerDied as died:
+            self.load_failure = f"loading your notebook {_exit_reason(died.returncode)}"
+            raise GradingFailure(self.load_failure) from None
+        except ProtocolError as error:
+            self.load_failure = f"loading your notebook failed: {error}"
+            raise GradingFailure(self.load_failure) from None
+        self.load_errors = reply.get("errors", [])
+
+    def _ensure_worker(self):
+        if self.load_failure:
+            raise GradingFailure(self.load_failure)
+        if self.worker is None or not self.worker.alive:
+            self._start()
+
+    def close(self):
+        """Stop the worker and remove the scratch folders this object created."""
+        if self.worker is not None:
+            self.worker.close()
+            self.worker = None
+        if self._own_scratch:
+            shutil.rmtree(self.scratch, ignore_errors=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    # -- messages ---------------------------------------------------------------------
+    def _not_defined(self, name):
+        skipped = self.code.skipped_assignment(name)
+        if skipped is not None:
+            return (f"`{name}` is not defined: the grader did not run `{skipped.text}` ({skipped.label}, line "
+                    f"{skipped.line}) because it is {skipped.reason}; define `{name}` with `def`")
+        for error in self.load_errors:
+            return (f"`{name}` is not defined; loading your notebook failed at {error['label']}"
+                    f"{_where(error) and ' (' + error['where'] + ')'}: {error['type']}: {error['message']}")
+        if self.code.syntax_errors:
+            label, message = self.code.syntax_errors[0]
+            return f"`{name}` is not defined; {label} has a syntax error ({message}) and was not run"
+        return f"`{name}` is not defined in your notebook; define a function called `{name}`"
+
+    def _raised(self, name, error, limit):
+        kind, message = error.get("type", "Exception"), error.get("message", "")
+        where = _where(error)
+        if kind == "NotDefined":
+            return self._not_defined(name)
+        if kind == "Timeout":
+            return (f"`{name}` did not finish within {limit:g} s{where} (an endless loop, or far too much work); "
+                    "it was stopped")
+        if kind == "NotImplementedError":
+            return f"`{name}` is not implemented yet: it raised NotImplementedError{where}"
+        if kind == "SystemExit":
+            return f"`{name}` raised SystemExit{where} (sys.exit() or exit() was called); a function must return its result"
+        if kind == "KeyboardInterrupt":
+            return f"`{name}` raised KeyboardInterrupt{where}; do not raise or simulate interrupts in your code"
+        if kind == "MemoryError":
+            return (f"`{name}` ran out of memory{where} (the limit is {self.limits['memory_mb']} MiB); "
+                    "it allocates far more than the problem needs")
+        if kind == "ReplacedBuiltins":
+            return f"`{name}` changed Python itself: {message}; the grader restored them and does not accept the result"
+        if kind == "PermissionError" and "grader does not let" in message:
+            return f"`{name}` did something the grader forbids{where}: {message}"
+        if kind == "PermissionError" and "not allowed in this exercise" in message:
+            return f"`{name}` used a forbidden library function{where}: {message}"
+        return f"`{name}` raised {kind}{where}: {message}" if message else f"`{name}` raised {kind}{where}"
+
+    # -- calls ------------------------------------------------------------------------
+    def call(self, name, *args, timeout=None, check_inputs=False, **kwargs):
+        """Call the submission's function `name` in the worker and return its result.
+
+        Parameters
+        ----------
+        name : str
+            The function the exercise asks for.
+        *args, **kwargs
+            Inputs: numbers, strings, lists, tuples, dicts, NumPy arrays and
+            registry functions (:func:`particles.course.registry.remote`).
+        timeout : float, optional
+            Wall-clock limit of this call, in seconds (default: the
+            submission's ``time_limit``).
+        check_inputs : bool
+            Fail when the function modified an array it was given.
+
+        Returns
+        -------
+        object
+            The decoded return value (arrays come back as ``ndarray``; values
+            the protocol cannot carry as :class:`particles.course.protocol.Unsupported`).
+
+        Raises
+        ------
+        GradingFailure
+            With one line saying what went wrong.
+        """
+        if self.load_failure:
+            raise GradingFailure(self.load_failure)
+        uses = self.code.forbidden_uses(name, self.forbidden)
+        if uses:
+            used, via = uses[0]
+            chain = f" (through {' -> '.join(via)})" if len(via) > 1 else ""
+            raise GradingFailure(f"`{name}` uses `{used}`{chain}, which this exercise forbids: {self.forbidden[used]}")
+        if name not in self.code.defines():
+            raise GradingFailure(self._not_defined(name))
+        limit = float(self.limits["time_limit"] if timeout is None else timeout)
+        self._ensure_worker()
+        request = {"op": "call", "name": name, "args": list(args), "kwargs": kwargs, "timeout": limit}
+        try:
+            reply = self.worker.request(request, limit + _GRACE)
+        except WorkerTimeout:
+            raise GradingFailure(
+                f"`{name}` did not finish within {limit:g} s (an endless loop, or far too much work); it was stopped"
+            ) from None
+        except WorkerDied as died:
+            raise GradingFailure(f"`{name}` {_exit_reason(died.returncode)}") from None
+        except ProtocolError as error:
+            raise GradingFailure(f"`{name}` returned a value the grader could not read: {error}") from None
+        if not reply.get("ok"):
+            raise GradingFailure(self._raised(name, reply.get("error", {}), limit))
+        if check_inputs:
+            self._check_inputs(name, args, kwargs, reply)
+        self.last = {"seconds": reply.get("seconds"), "calls": reply.get("calls", {})}
+        value = reply.get("value")
+        return value
+
+    def calls_of(self, position):
+        """How often the last call used the registry function passed at `position` (int or keyword)."""
+        return self.last.get("calls", {}).get(str(position), 0)
+
+    def _check_inputs(self, name, args, kwargs, reply):
+        params = self.code.parameters(name) or []
+        after = list(zip(range(len(args)), args, reply.get("args_after", [])))
+        after += [(k, v, reply.get("kwargs_after", {}).get(k)) for k, v in kwargs.items()]
+        for key, before, now in after:
+            if not isinstance(before, np.ndarray) or now is None:
+                continue
+            same = isinstance(now, np.ndarray) and now.shape == before.shape and np.array_equal(now, before, equal_nan=True)
+            if not same:
+                label = params[key] if isinstance(key, int) and key < len(params) else (key if isinstance(key, str) else f"number {key + 1}")
+                raise GradingFailure(
+                    f"`{name}` modified its input `{label}` in place; leave the arrays it is given unchanged "
+                    f"and return a new array (e.g. start from `{label}.copy()` or build the result with `+`)"
+                )
+
+
+def describe_value(value):
+    """A short description of a returned value, for failure messages."""
+    if isinstance(value, Unsupported):
+        return f"a {value.type_name}"
+    if isinstance(value, np.ndarray):
+        return f"an array of shape {value.shape} and dtype {value.dtype}"
+    if value is None:
+        return "None (did you forget `return`?)"
+    return f"a {type(value).__name__}"
+

@@ -1,0 +1,143 @@
+"""Autograder tests of exercise 00_warmup: Euler's step, gravity plus damping, the loop.
+
+Public tests use fixed inputs a student can reason about; hidden tests draw
+random shapes and parameters from the grading seed (fixture ``rng``), so that
+hard-coded answers fail. Every expected value comes from the reference
+library, computed here in the grader, never in the student's process.
+"""
+
+import numpy as np
+import pytest
+
+import particles
+from particles.course.expect import expect_array
+from particles.course.registry import remote
+from particles.course.runner import GradingFailure, describe_value
+from particles.forces import Damping, Gravity
+from particles.integrators import euler, midpoint
+
+EXERCISE = "00_warmup"
+FORBIDDEN = {
+    "particles.integrators.euler": "it is the Euler step you are asked to write",
+    "particles.integrators.INTEGRATORS": "it holds the library's own steppers; write the step yourself",
+    "particles.integrators.integrate": "it is the loop you are asked to write",
+    "particles.forces.Gravity": "compute m g yourself",
+    "particles.forces.Damping": "compute -d v yourself",
+    "particles.system.ParticleSystem": "it computes the forces and runs the loop for you",
+}
+
+
+def _reference_force(x, v, m, g, d):
+    return Gravity(g)(x, v, 0.0, m) + Damping(d)(x, v, 0.0, m)
+
+
+def _random_state(rng, n, d):
+    return rng.normal(size=(n, 2, d))
+
+
+# -- euler_step --------------------------------------------------------------------------------
+
+
+@pytest.mark.points(1)
+def test_euler_step_circle(student):
+    """euler_step takes one step on the circle field f = (-y, x) from (1, 0)."""
+    f, X = remote("circle"), np.array([1.0, 0.0])
+    got = student.call("euler_step", f, X, 0.0, 0.1)
+    expect_array(got, euler(f, X, 0.0, 0.1), "euler_step(f, X=[1, 0], t=0, h=0.1) on the circle field",
+                 hints={"a midpoint step": midpoint(f, X, 0.0, 0.1)})
+
+
+@pytest.mark.points(1)
+def test_euler_step_oscillator(student):
+    """euler_step advances a particle state (1, 2, 1) of the harmonic oscillator."""
+    f = remote("harmonic_oscillator", omega=2.0)
+    X = np.array([[[1.0], [0.5]]])
+    got = student.call("euler_step", f, X, 0.0, 0.05)
+    expect_array(got, euler(f, X, 0.0, 0.05), "euler_step(f, X, t=0, h=0.05) on the oscillator with omega = 2",
+                 hints={"a midpoint step": midpoint(f, X, 0.0, 0.05)})
+
+
+@pytest.mark.points(1)
+def test_euler_step_leaves_X_unchanged(student):
+    """euler_step returns a new array and does not modify X or call f more than once."""
+    f = remote("harmonic_oscillator", omega=1.0)
+    X = np.array([[[1.0], [0.0]], [[0.0], [1.0]]])
+    student.call("euler_step", f, X, 0.0, 0.1, check_inputs=True)
+    if student.calls_of(0) != 1:
+        raise GradingFailure(f"euler_step evaluated f {student.calls_of(0)} times in one step; Euler's method "
+                             "uses exactly one evaluation, f(X, t)")
+
+
+@pytest.mark.points(2)
+@pytest.mark.hidden
+def test_euler_step_random(student, rng):
+    """euler_step matches the reference on random states, times and steps of a driven oscillator."""
+    for _ in range(3):
+        n, d = int(rng.integers(1, 6)), int(rng.integers(1, 4))
+        omega, h, t = rng.uniform(0.5, 3.0), rng.uniform(0.001, 0.2), rng.uniform(0.0, 10.0)
+        f = remote("forced_oscillator", omega=omega, amplitude=rng.uniform(0.5, 2.0), frequency=omega + 1.3)
+        X = _random_state(rng, n, d)
+        expect_array(student.call("euler_step", f, X, t, h), euler(f, X, t, h),
+                     f"euler_step(f, X of shape {X.shape}, t={t:.3g}, h={h:.3g}) on a driven oscillator",
+                     hints={"a midpoint step": midpoint(f, X, t, h)})
+
+
+# -- total_force -------------------------------------------------------------------------------
+
+
+@pytest.mark.points(1)
+def test_total_force_three_particles(student):
+    """total_force adds m g and -d v for three particles in 2D."""
+    x = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    v = np.array([[1.0, 0.0], [0.0, -2.0], [0.5, 0.5]])
+    m, g, d = np.array([1.0, 2.0, 0.5]), np.array([0.0, -9.81]), 0.3
+    got = student.call("total_force", x, v, m, g, d)
+    expect_array(got, _reference_force(x, v, m, g, d), "total_force(x, v, m=[1, 2, 0.5], g=[0, -9.81], d=0.3)")
+
+
+@pytest.mark.points(2)
+@pytest.mark.hidden
+def test_total_force_random(student, rng):
+    """total_force matches the reference for random particles in 2D and 3D, without changing its inputs."""
+    for dim in (2, 3):
+        n = int(rng.integers(5, 50))
+        x, v = rng.normal(size=(n, dim)), rng.normal(size=(n, dim))
+        m, g, d = rng.uniform(0.1, 3.0, n), rng.normal(size=dim), rng.uniform(0.0, 2.0)
+        got = student.call("total_force", x, v, m, g, d, check_inputs=True)
+        expect_array(got, _reference_force(x, v, m, g, d), f"total_force for {n} random particles in {dim}D")
+
+
+# -- run ---------------------------------------------------------------------------------------
+
+
+def _reference_run(f, X0, t0, h, n):
+    return particles.integrate(f, X0, t0, t0 + n * h, h, method="euler")
+
+
+def _check_run(got, f, X0, t0, h, n, call):
+    if not isinstance(got, tuple) or len(got) != 2:
+        kind = describe_value(got) if not isinstance(got, tuple) else f"a tuple of {len(got)} values"
+        raise GradingFailure(f"{call} returned {kind}, expected the tuple (t, X)")
+    t_ref, X_ref = _reference_run(f, X0, t0, h, n)
+    expect_array(got[0], t_ref, f"the times t of {call}", rtol=1e-9)
+    expect_array(got[1], X_ref, f"the states X of {call}", rtol=1e-9)
+
+
+@pytest.mark.points(1)
+def test_run_circle(student):
+    """run takes 10 Euler steps on the circle field and records all 11 states."""
+    f, X0 = remote("circle"), np.array([1.0, 0.0])
+    _check_run(student.call("run", f, X0, 0.0, 0.1, 10), f, X0, 0.0, 0.1, 10,
+               "run(f, X0=[1, 0], t0=0, h=0.1, n_steps=10) on the circle field")
+
+
+@pytest.mark.points(2)
+@pytest.mark.hidden
+def test_run_random(student, rng):
+    """run matches the reference loop on a driven oscillator with random start, time and step."""
+    n, d, steps = int(rng.integers(1, 4)), int(rng.integers(1, 3)), int(rng.integers(20, 60))
+    omega = rng.uniform(0.5, 3.0)
+    f = remote("forced_oscillator", omega=omega, amplitude=1.0, frequency=omega + 0.7)
+    X0, t0, h = _random_state(rng, n, d), rng.uniform(0.0, 5.0), rng.uniform(0.005, 0.05)
+    _check_run(student.call("run", f, X0, t0, h, steps, check_inputs=True), f, X0, t0, h, steps,
+               f"run(f, X0 of shape {X0.shape}, t0={t0:.3g}, h={h:.3g}, n_steps={steps})")

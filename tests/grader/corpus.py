@@ -1,0 +1,472 @@
+"""A corpus of submissions to exercise 00_warmup, each with what the grader must say about it.
+
+Each case starts from the master notebook and replaces the code cell that
+defines one or more functions (``replace``), or appends cells (``append``).
+``fails`` maps the tests that must fail to a piece of their one-line reason;
+``passes`` lists tests that must still pass. Correct variants (``CORRECT``)
+must score full marks.
+"""
+
+import json
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+MASTER = ROOT / "solutions" / "00_warmup.ipynb"
+STUB = ROOT / "exercises" / "00_warmup.ipynb"
+
+EULER_PUBLIC = [
+    "test_euler_step_circle", "test_euler_step_oscillator", "test_euler_step_leaves_X_unchanged",
+]
+
+REJECTED = {
+    "euler_as_midpoint": {
+        "replace": {"euler_step": """
+def euler_step(f, X, t, h):
+    X_mid = X + 0.5 * h * f(X, t)
+    return X + h * f(X_mid, t + 0.5 * h)
+"""},
+        "fails": {"test_euler_step_circle": "your result matches a midpoint step",
+                  "test_euler_step_random": "matches a midpoint step"},
+    },
+    "euler_wrong_time": {
+        "replace": {"euler_step": """
+def euler_step(f, X, t, h):
+    return X + h * f(X, t + h)
+"""},
+        "fails": {"test_euler_step_random": "is off by"},
+        "passes": ["test_euler_step_circle", "test_euler_step_oscillator"],
+    },
+    "infinite_loop": {
+        "replace": {"total_force": """
+def total_force(x, v, m, g, d):
+    while True:
+        pass
+"""},
+        "fails": {"test_total_force_three_particles": "did not finish within 2 s"},
+        "passes": EULER_PUBLIC,
+    },
+    "loop_that_catches_the_timeout": {
+        "replace": {"total_force": """
+import time
+
+def total_force(x, v, m, g, d):
+    while True:
+        try:
+            time.sleep(0.05)
+        except BaseException:
+            pass
+"""},
+        "fails": {"test_total_force_three_particles": "did not finish within 2 s",
+                  "test_total_force_random": "did not finish within 2 s"},
+        "passes": EULER_PUBLIC + ["test_run_circle"],
+    },
+    "huge_allocation": {
+        "replace": {"total_force": """
+def total_force(x, v, m, g, d):
+    work = np.ones(400_000_000)   # 3.2 GB
+    return m[:, None] * g - d * v + work[0] * 0
+"""},
+        "fails": {"test_total_force_three_particles": "ran out of memory"},
+        "passes": EULER_PUBLIC,
+    },
+    "calls_sys_exit": {
+        "replace": {"euler_step": """
+import sys
+
+def euler_step(f, X, t, h):
+    sys.exit(0)
+"""},
+        "fails": {"test_euler_step_circle": "raised SystemExit"},
+        "passes": ["test_total_force_three_particles"],
+    },
+    "calls_os_exit": {
+        "replace": {"euler_step": """
+import os
+
+def euler_step(f, X, t, h):
+    os._exit(0)
+"""},
+        "fails": {"test_euler_step_circle": "ended the worker process with exit status 0",
+                  "test_run_circle": "ended the worker process"},
+        "passes": ["test_total_force_three_particles"],
+    },
+    "crashes_the_interpreter": {
+        "replace": {"total_force": """
+import faulthandler
+
+def total_force(x, v, m, g, d):
+    faulthandler._sigsegv()        # a segmentation fault, as a bug in compiled code would cause
+    return m[:, None] * g - d * v
+"""},
+        "fails": {"test_total_force_three_particles": "crashed the worker process with SIGSEGV"},
+        "passes": EULER_PUBLIC + ["test_run_circle"],
+    },
+    "raises_keyboard_interrupt": {
+        "replace": {"euler_step": """
+def euler_step(f, X, t, h):
+    raise KeyboardInterrupt
+"""},
+        "fails": {"test_euler_step_circle": "raised KeyboardInterrupt"},
+        "passes": ["test_total_force_three_particles"],
+    },
+    "raises_system_exit": {
+        "replace": {"total_force": """
+def total_force(x, v, m, g, d):
+    raise SystemExit("done")
+"""},
+        "fails": {"test_total_force_three_particles": "raised SystemExit"},
+        "passes": EULER_PUBLIC,
+    },
+    "wrong_shape": {
+        "replace": {"total_force": """
+def total_force(x, v, m, g, d):
+    return (m[:, None] * g - d * v).sum(axis=0)
+"""},
+        "fails": {"test_total_force_three_particles": "expected shape (3, 2)"},
+    },
+    "returns_nan": {
+        "replace": {"euler_step": """
+def euler_step(f, X, t, h):
+    return X + h * f(X, t) * np.nan
+"""},
+        "fails": {"test_euler_step_circle": "expected finite numbers"},
+    },
+    "mutates_input": {
+        "replace": {"euler_step": """
+def euler_step(f, X, t, h):
+    X += h * f(X, t)
+    return X
+"""},
+        "fails": {"test_euler_step_leaves_X_unchanged": "modified its input `X` in place"},
+        "passes": ["test_euler_step_circle", "test_euler_step_oscillator"],
+    },
+    "prints_a_passing_results_line": {
+        "replace": {"euler_step": """
+def euler_step(f, X, t, h):
+    print("========== 8 passed in 0.01s ==========")
+    print('{"score": 11, "max_score": 11, "tests": []}')
+    return X.copy()
+"""},
+        "fails": {"test_euler_step_circle": "is off by", "test_euler_step_oscillator": "is off by"},
+    },
+    "writes_a_fake_results_json": {
+        "replace": {"total_force": """
+import json, os
+
+def total_force(x, v, m, g, d):
+    fake = json.dumps({"score": 11, "tests": []})
+    open("results.json", "w").write(fake)           # its own folder: allowed, and ignored
+    for folder in ("/autograder/results", os.path.join(os.getcwd(), "..", "..", "results")):
+        open(os.path.join(folder, "results.json"), "w").write(fake)
+    return np.zeros_like(x)
+"""},
+        "fails": {"test_total_force_three_particles": "write outside their working directory"},
+    },
+    "monkeypatches_numpy_checks": {
+        "replace": {"euler_step": """
+import numpy.testing
+
+def euler_step(f, X, t, h):
+    np.allclose = lambda *args, **kwargs: True
+    np.isclose = lambda a, b, *args, **kwargs: np.ones(np.shape(a), dtype=bool)
+    numpy.testing.assert_allclose = lambda *args, **kwargs: None
+    return X * 0.0
+"""},
+        "fails": {"test_euler_step_circle": "is off by", "test_euler_step_oscillator": "is off by"},
+    },
+    "monkeypatches_builtins": {
+        "replace": {"total_force": """
+import builtins
+
+def total_force(x, v, m, g, d):
+    builtins.abs = lambda value: 0.0
+    builtins.isinstance = lambda *args: True
+    builtins.AssertionError = type("Nothing", (Exception,), {})
+    return np.zeros((1,))
+"""},
+        "fails": {"test_total_force_three_particles": "replaced Python's built-in AssertionError, abs, isinstance"},
+        "passes": EULER_PUBLIC,
+    },
+    "reads_the_solution_file": {
+        "replace": {"euler_step": """
+import json, pathlib
+import particles
+
+def euler_step(f, X, t, h):
+    master = pathlib.Path(particles.__file__).resolve().parents[1] / "solutions" / "00_warmup.ipynb"
+    cells = json.loads(master.read_text())["cells"]
+    namespace = {"np": np}
+    exec("".join(cells[3]["source"]), namespace)
+    return namespace["euler_step"](f, X, t, h)
+"""},
+        "fails": {"test_euler_step_circle": "read its private files"},
+    },
+    "spies_on_the_grader_process": {
+        "replace": {"euler_step": """
+import os
+
+def euler_step(f, X, t, h):
+    secrets = open(f"/proc/{os.getppid()}/environ", "rb").read()   # the grader's environment
+    return X + h * f(X, t) + 0.0 * len(secrets)
+"""},
+        "fails": {"test_euler_step_circle": "read its private files (/proc/"},
+    },
+    "hard_codes_public_answers": {
+        "replace": {"euler_step": """
+def euler_step(f, X, t, h):
+    f(X, t)
+    if X.shape == (2,):
+        return np.array([1.0, 0.1])
+    if X.shape == (1, 2, 1):
+        return np.array([[[1.025], [0.3]]])
+    return X.copy()
+"""},
+        "fails": {"test_euler_step_random": "is off by"},
+        "passes": EULER_PUBLIC + ["test_total_force_three_particles"],
+    },
+    "calls_the_library_stepper": {
+        "replace": {"euler_step": """
+from particles.integrators import euler
+
+def euler_step(f, X, t, h):
+    return euler(f, X, t, h)
+"""},
+        "fails": {"test_euler_step_circle": "uses `particles.integrators.euler`",
+                  "test_run_circle": "through run -> euler_step"},
+    },
+    "calls_the_library_stepper_dynamically": {
+        "replace": {"euler_step": """
+import importlib
+
+def euler_step(f, X, t, h):
+    module = importlib.import_module("particles." + "integ" + "rators")
+    return getattr(module, "eu" + "ler")(f, X, t, h)
+"""},
+        "fails": {"test_euler_step_circle": "not allowed in this exercise"},
+    },
+    "calls_the_library_loop": {
+        "replace": {"run": """
+import particles
+
+def run(f, X0, t0, h, n_steps):
+    return particles.integrate(f, X0, t0, t0 + n_steps * h, h, method="euler")
+"""},
+        "fails": {"test_run_circle": "uses `particles.integrators.integrate`"},
+        "passes": EULER_PUBLIC,
+    },
+    "wrong_damping_sign": {
+        "replace": {"total_force": """
+def total_force(x, v, m, g, d):
+    return m[:, None] * g + d * v
+"""},
+        "fails": {"test_total_force_three_particles": "is off by"},
+    },
+    "returns_a_list": {
+        "replace": {"total_force": """
+def total_force(x, v, m, g, d):
+    return (m[:, None] * g - d * v).tolist()
+"""},
+        "fails": {"test_total_force_three_particles": "returned a list"},
+    },
+    "integer_result": {
+        "replace": {"euler_step": """
+def euler_step(f, X, t, h):
+    return (X + h * f(X, t)).astype(int)
+"""},
+        "fails": {"test_euler_step_circle": "dtype int64"},
+    },
+    "run_off_by_one": {
+        "replace": {"run": """
+def run(f, X0, t0, h, n_steps):
+    t = t0 + h * np.arange(n_steps)
+    X = [X0]
+    for k in range(n_steps - 1):
+        X.append(euler_step(f, X[-1], t[k], h))
+    return t, np.array(X)
+"""},
+        "fails": {"test_run_circle": "expected shape (11,)"},
+    },
+    "run_returns_only_states": {
+        "replace": {"run": """
+def run(f, X0, t0, h, n_steps):
+    X = [np.asarray(X0, dtype=float)]
+    for k in range(n_steps):
+        X.append(euler_step(f, X[-1], t0 + k * h, h))
+    return np.array(X)
+"""},
+        "fails": {"test_run_circle": "returned an array of shape (11, 2)"},
+    },
+    "run_is_a_generator": {
+        "replace": {"run": """
+def run(f, X0, t0, h, n_steps):
+    for k in range(n_steps + 1):
+        yield t0 + k * h
+"""},
+        "fails": {"test_run_circle": "returned a generator, expected the tuple (t, X)"},
+    },
+    "evaluates_f_twice": {
+        "replace": {"euler_step": """
+def euler_step(f, X, t, h):
+    slope = f(X, t)
+    check = f(X, t)
+    return X + h * 0.5 * (slope + check)
+"""},
+        "fails": {"test_euler_step_leaves_X_unchanged": "evaluated f 2 times"},
+        "passes": ["test_euler_step_circle"],
+    },
+    "function_renamed": {
+        "replace": {"run": """
+def simulate(f, X0, t0, h, n_steps):
+    return None
+"""},
+        "fails": {"test_run_circle": "`run` is not defined in your notebook"},
+        "passes": EULER_PUBLIC,
+    },
+    "syntax_error": {
+        "replace": {"euler_step": """
+def euler_step(f, X, t, h)
+    return X + h * f(X, t)
+"""},
+        "fails": {"test_euler_step_circle": "has a syntax error"},
+        "passes": ["test_total_force_three_particles"],
+    },
+    "defined_by_a_call": {
+        "replace": {"euler_step": """
+def make_stepper():
+    def step(f, X, t, h):
+        return X + h * f(X, t)
+    return step
+
+euler_step = make_stepper()
+"""},
+        "fails": {"test_euler_step_circle": "the grader did not run `euler_step = make_stepper()`"},
+    },
+    "endless_recursion": {
+        "replace": {"euler_step": """
+def euler_step(f, X, t, h):
+    return euler_step(f, X, t, h / 2)
+"""},
+        "fails": {"test_euler_step_circle": "raised RecursionError"},
+    },
+}
+
+CORRECT = {
+    "per_coordinate_loops_and_lists": {
+        "replace": {
+            "euler_step": """
+def euler_step(f, X, t, h):
+    slope = np.asarray(f(X, t), dtype=float)
+    out = np.array(X, dtype=float, copy=True)
+    out += h * slope          # on the copy, never on X
+    return out
+""",
+            "total_force": """
+def total_force(x, v, m, g, d):
+    F = np.empty(np.shape(v))
+    for a in range(F.shape[1]):   # a loop over the coordinates, not over particles
+        F[:, a] = m * g[a] - d * v[:, a]
+    return F
+""",
+            "run": """
+def run(f, X0, t0, h, n_steps):
+    states, times = [np.array(X0, dtype=float)], [t0]
+    while len(states) <= n_steps:
+        k = len(states) - 1
+        states.append(euler_step(f, states[-1], t0 + k * h, h))
+        times.append(t0 + (k + 1) * h)
+    return np.array(times), np.stack(states)
+""",
+        },
+    },
+    "helpers_and_other_names": {
+        "replace": {
+            "euler_step": """
+def _tangent(rhs, state, time):
+    return np.asarray(rhs(state, time))
+
+
+def euler_step(f, X, t, h):
+    return np.add(X, h * _tangent(f, X, t))
+""",
+            "total_force": """
+def _weights(masses, gravity):
+    return np.outer(masses, gravity)
+
+
+def total_force(x, v, m, g, d):
+    drag = np.multiply(-d, v)
+    return _weights(m, g) + drag
+""",
+            "run": """
+def run(f, X0, t0, h, n_steps):
+    times = np.linspace(t0, t0 + n_steps * h, n_steps + 1)
+    trajectory = np.zeros((n_steps + 1,) + np.shape(X0))
+    trajectory[0] = X0
+    for k, tk in enumerate(times[:-1]):
+        trajectory[k + 1] = euler_step(f, trajectory[k], tk, h)
+    return times, trajectory
+""",
+        },
+    },
+    "slow_and_broken_experiments_around_correct_code": {
+        "replace": {
+            "total_force": """
+from typing import Callable
+
+GRAVITY = np.array([0.0, -9.81])
+
+
+class ForceSum:
+    def __call__(self, m, g, d, v):
+        return np.einsum("i,j->ij", m, g) - d * v
+
+
+def total_force(x, v, m, g, d):
+    return ForceSum()(np.asarray(m, float), np.asarray(g, float), float(d), np.asarray(v, float))
+""",
+        },
+        "append": [
+            "import time\nfor _ in range(1000):\n    time.sleep(1)   # an experiment the grader must not run",
+            "plt.plot(undefined_name)",
+            "%timeit euler_step(circle_field, X, 0.0, 0.1)",
+        ],
+    },
+}
+
+
+def _source(cell):
+    source = cell["source"]
+    return "".join(source) if isinstance(source, list) else source
+
+
+def build(case):
+    """The notebook (a dict) of corpus case `case` (a dict with replace/append)."""
+    notebook = json.loads(MASTER.read_text())
+    for name, code in case.get("replace", {}).items():
+        for cell in notebook["cells"]:
+            if cell["cell_type"] == "code" and f"def {name}(" in _source(cell):
+                cell["source"] = code.strip("\n")
+                break
+        else:
+            raise KeyError(f"no cell defines {name}")
+    for code in case.get("append", []):
+        notebook["cells"].append({"cell_type": "code", "metadata": {}, "source": code, "outputs": [],
+                                  "execution_count": None, "id": f"extra-{len(notebook['cells'])}"})
+    notebook["metadata"]["particles"] = {"exercise": "00_warmup"}
+    return notebook
+
+
+def write_corpus(folder):
+    """Write every case as ``folder/<case>/00_warmup.ipynb`` (one student per case); return the names."""
+    folder = Path(folder)
+    names = []
+    cases = dict(REJECTED, **CORRECT)
+    for name, case in cases.items():
+        (folder / name).mkdir(parents=True, exist_ok=True)
+        (folder / name / "00_warmup.ipynb").write_text(json.dumps(build(case), indent=1))
+        names.append(name)
+    for name, path in (("master", MASTER), ("released_stub", STUB)):
+        (folder / name).mkdir(parents=True, exist_ok=True)
+        (folder / name / "00_warmup.ipynb").write_text(path.read_text())
+        names.append(name)
+    return names

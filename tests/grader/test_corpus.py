@@ -1,0 +1,109 @@
+"""The grader on a corpus of submissions: right verdicts, clear reasons, a record for everything.
+
+All notebooks are graded once (module fixture, two jobs, per-call time limit
+2 s, fixed seed); the tests then read the verdicts.
+"""
+
+import csv
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+import corpus  # noqa: E402
+
+from particles.course.grading import grade  # noqa: E402
+from particles.course.reports import score_of  # noqa: E402
+
+SEED = 20240611
+CASES = dict(corpus.REJECTED, **corpus.CORRECT)
+
+
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("corpus")
+    names = corpus.write_corpus(tmp / "submissions")
+    summary = grade([tmp / "submissions"], tmp / "out", jobs=2, seed=SEED, time_limit=2.0, root=corpus.ROOT)
+    return {"summary": summary, "out": tmp / "out", "names": names}
+
+
+def _tests(graded, student):
+    (result,) = graded["summary"]["students"][student]
+    return {t["test"]: t for t in result["tests"]}
+
+
+def test_corpus_is_large_enough():
+    """The corpus holds at least 20 submissions to reject and 3 correct variants."""
+    assert len(corpus.REJECTED) >= 20 and len(corpus.CORRECT) >= 3
+
+
+def test_every_submission_yields_a_record(graded):
+    """Every notebook gets results.json, feedback and a gradebook row, whatever it did."""
+    assert graded["summary"]["problems"] == []
+    assert set(graded["summary"]["students"]) == set(graded["names"])
+    rows = list(csv.DictReader(open(graded["out"] / "gradebook.csv")))
+    assert {r["student"] for r in rows} == set(graded["names"])
+    for name in graded["names"]:
+        data = json.loads((graded["out"] / name / "results.json").read_text())
+        assert data["max_score"] == 11 and len(data["tests"]) == 8
+        assert (graded["out"] / name / "feedback.md").read_text().startswith(f"# Feedback for {name}")
+        assert all(t["grader_error"] is False for t in _tests(graded, name).values())
+
+
+def test_master_scores_full_marks(graded):
+    """The master solution passes every public and hidden test."""
+    tests = _tests(graded, "master")
+    assert all(t["passed"] for t in tests.values()), [t["reason"] for t in tests.values() if not t["passed"]]
+
+
+def test_released_stub_scores_zero(graded):
+    """The released stub scores 0, each test saying the function is not implemented yet."""
+    tests = _tests(graded, "released_stub")
+    assert score_of(list(tests.values()))[0] == 0
+    assert all("is not implemented yet" in t["reason"] for t in tests.values())
+
+
+@pytest.mark.parametrize("name", sorted(corpus.REJECTED))
+def test_rejected_on_the_right_test_with_a_clear_reason(graded, name):
+    """A bad submission fails the tests it should, each with its one-line reason."""
+    tests = _tests(graded, name)
+    case = corpus.REJECTED[name]
+    for test, reason in case["fails"].items():
+        assert not tests[test]["passed"], f"{test} should fail"
+        assert reason in tests[test]["reason"], tests[test]["reason"]
+        assert "\n" not in tests[test]["reason"]
+    for test in case.get("passes", []):
+        assert tests[test]["passed"], f"{test} should pass: {tests[test]['reason']}"
+    assert score_of(list(tests.values()))[0] < 11
+
+
+@pytest.mark.parametrize("name", sorted(corpus.CORRECT))
+def test_correct_variants_score_full_marks(graded, name):
+    """Correct code written differently from the master scores full marks."""
+    tests = _tests(graded, name)
+    assert all(t["passed"] for t in tests.values()), {k: t["reason"] for k, t in tests.items() if not t["passed"]}
+
+
+def test_hidden_tests_record_their_seed(graded):
+    """Hidden tests record the grading seed; results.json and feedback show it."""
+    tests = _tests(graded, "hard_codes_public_answers")
+    assert tests["test_euler_step_random"]["seed"] == SEED
+    data = json.loads((graded["out"] / "hard_codes_public_answers" / "results.json").read_text())
+    assert data["extra_data"]["seeds"] == {"00_warmup": SEED}
+    hidden = [t for t in data["tests"] if "hidden" in t["tags"]]
+    assert hidden and all(t["visibility"] == "after_published" for t in hidden)
+    assert f"seed {SEED}" in (graded["out"] / "hard_codes_public_answers" / "feedback.md").read_text()
+
+
+def test_worker_restarts_are_reported(graded):
+    """A submission that kills its worker gets a note that the worker was restarted."""
+    (result,) = graded["summary"]["students"]["calls_os_exit"]
+    assert any("restarted" in note for note in result["notes"])
+
+
+def test_fake_results_do_not_leak(graded):
+    """A submission that writes a fake results.json cannot touch the grader's outputs."""
+    data = json.loads((graded["out"] / "writes_a_fake_results_json" / "results.json").read_text())
+    assert data["score"] < 11 and len(data["tests"]) == 8

@@ -1,0 +1,72 @@
+"""`particles grade` and `particles.check` from the command line and from Python."""
+
+import csv
+import shutil
+from pathlib import Path
+
+import pytest
+
+import particles
+from particles.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_grade_a_folder_of_students(tmp_path, capsys):
+    """grade --jobs 2 writes a gradebook row per student folder and prints a summary table."""
+    for student, source in (("ada", "solutions"), ("bob", "exercises")):
+        (tmp_path / "subs" / student).mkdir(parents=True)
+        shutil.copy(ROOT / source / "00_warmup.ipynb", tmp_path / "subs" / student / "00_warmup.ipynb")
+    code = main(["grade", str(tmp_path / "subs"), "--out", str(tmp_path / "out"), "--jobs", "2",
+                 "--seed", "3", "--root", str(ROOT)])
+    assert code == 0
+    out = capsys.readouterr().out
+    assert "ada" in out and "11/11" in out and "0/11" in out
+    rows = {r["student"]: r for r in csv.DictReader(open(tmp_path / "out" / "gradebook.csv"))}
+    assert rows["ada"]["00_warmup"] == "11" and rows["bob"]["total"] == "0" and rows["bob"]["max_total"] == "11"
+    assert list((tmp_path / "out" / "logs").glob("batch*-00_warmup.log"))
+
+
+def test_grade_public_only(tmp_path, capsys):
+    """--public runs the 5 public points only (what a student runs)."""
+    assert main(["grade", str(ROOT / "solutions" / "00_warmup.ipynb"), "--public", "--root", str(ROOT)]) == 0
+    assert "5/5" in capsys.readouterr().out
+
+
+def test_grade_reports_bad_arguments(tmp_path, capsys):
+    """An unknown exercise is a usage error (status 2); a notebook of unknown exercise is listed, not graded."""
+    assert main(["grade", str(tmp_path), "--exercise", "99_none", "--root", str(ROOT)]) == 2
+    assert "unknown exercise '99_none'" in capsys.readouterr().err
+    (tmp_path / "mystery.ipynb").write_text("{}")
+    assert main(["grade", str(tmp_path), "--root", str(ROOT)]) == 1
+    assert "cannot tell which exercise" in capsys.readouterr().err
+
+
+def test_check_a_saved_notebook():
+    """particles.check on a saved notebook reports public tests with readable reasons."""
+    good = particles.check("00_warmup", notebook=ROOT / "solutions" / "00_warmup.ipynb", root=ROOT)
+    assert good.passed and good.score == good.max_score == 5
+    stub = particles.check("00_warmup", notebook=ROOT / "exercises" / "00_warmup.ipynb", root=ROOT)
+    assert not stub.passed and stub.score == 0
+    text = str(stub)
+    assert "FAIL  euler_step takes one step" in text and "not implemented yet" in text
+    assert "| ❌ |" in stub._repr_markdown_()
+
+
+def test_check_outside_a_notebook_needs_a_path():
+    """Without a kernel and without notebook=, check says what to pass."""
+    with pytest.raises(ValueError, match="notebook="):
+        particles.check("00_warmup", root=ROOT)
+    with pytest.raises(ValueError, match="unknown exercise"):
+        particles.check("99_none", root=ROOT)
+
+
+def test_one_notebook_per_student_and_exercise(tmp_path, capsys):
+    """Two notebooks of one exercise from one student: the exactly named one is graded, the other reported."""
+    folder = tmp_path / "subs" / "cy"
+    folder.mkdir(parents=True)
+    shutil.copy(ROOT / "solutions" / "00_warmup.ipynb", folder / "00_warmup.ipynb")
+    shutil.copy(ROOT / "exercises" / "00_warmup.ipynb", folder / "old_00_warmup.ipynb")
+    assert main(["grade", str(tmp_path / "subs"), "--public", "--root", str(ROOT)]) == 0
+    captured = capsys.readouterr()
+    assert "5/5" in captured.out and "several notebooks for 00_warmup" in captured.err
