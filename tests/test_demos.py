@@ -110,5 +110,5 @@ def test_demo_runs_headless_from_the_command_line(tmp_path):
 
 def test_unknown_demo_is_rejected():
     """An unknown name lists the demos."""
-    with pytest.raises(ValueError, match="unknown demo 'cloth'; expected one of 'fountain'"):
-        run_demo("cloth")
+    with pytest.raises(ValueError, match="unknown demo 'rain'; expected one of 'fountain'"):
+        run_demo("rain")

@@ -10,6 +10,7 @@
   ``tests/test_release.py``.
 """
 
+import re
 from pathlib import Path
 
 import nbformat
@@ -54,4 +55,4 @@ def test_released_exercise_runs_up_to_the_stubs(path):
     first_code = [k for k, c in enumerate(nb.cells) if c.cell_type == "code"][0]
     assert all(k > first_code for k, _ in errors)
     check = "".join(o.get("data", {}).get("text/plain", "") for o in nb.cells[-1].get("outputs", []))
-    assert "0 / 5 points on the public tests" in check and "not implemented yet" in check, check
+    assert re.search(r"\b0 / \d+ points on the public tests", check) and "not implemented yet" in check, check

@@ -1,0 +1,86 @@
+"""The exercises' autograders on their corpora: masters full marks, stubs zero, wrong answers caught.
+
+Every ``cases_NN_topic.py`` of this folder is graded in one run (module
+fixture, two jobs, fixed seed); the tests then read the verdicts. See
+``exercise_corpus.py`` for the format of a case.
+"""
+
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+import exercise_corpus  # noqa: E402
+
+from particles.course.grading import grade  # noqa: E402
+from particles.course.reports import score_of  # noqa: E402
+
+SEED = 20261201
+MODULES = exercise_corpus.case_modules()
+EXERCISES = [m.EXERCISE for m in MODULES]
+REJECTED = [(m.EXERCISE, name) for m in MODULES for name in sorted(m.REJECTED)]
+CORRECT = [(m.EXERCISE, name) for m in MODULES for name in sorted(getattr(m, "CORRECT", {}))]
+CASES = {m.EXERCISE: dict(m.REJECTED, **getattr(m, "CORRECT", {})) for m in MODULES}
+
+
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("exercise-corpora")
+    students = exercise_corpus.write_corpora(tmp / "submissions", MODULES)
+    summary = grade([tmp / "submissions"], tmp / "out", jobs=2, seed=SEED, time_limit=10.0,
+                    root=exercise_corpus.ROOT)
+    return {"summary": summary, "students": students}
+
+
+def _tests(graded, exercise, case):
+    (result,) = graded["summary"]["students"][f"{exercise}__{case}"]
+    assert result["exercise"] == exercise
+    return {t["test"]: t for t in result["tests"]}
+
+
+@pytest.mark.parametrize("exercise", EXERCISES)
+def test_each_exercise_has_at_least_two_wrong_submissions(exercise):
+    """Every exercise's corpus holds at least two submissions that must lose points."""
+    (module,) = [m for m in MODULES if m.EXERCISE == exercise]
+    assert len(module.REJECTED) >= 2
+
+
+@pytest.mark.parametrize("exercise", EXERCISES)
+def test_master_scores_full_marks(graded, exercise):
+    """The master notebook passes every public and hidden test of its exercise."""
+    tests = _tests(graded, exercise, "master")
+    assert tests and all(t["passed"] for t in tests.values()), \
+        {k: t["reason"] for k, t in tests.items() if not t["passed"]}
+
+
+@pytest.mark.parametrize("exercise", EXERCISES)
+def test_released_stub_scores_zero(graded, exercise):
+    """The released stub scores nothing, and the grader says why without failing itself."""
+    tests = _tests(graded, exercise, "released_stub")
+    assert score_of(list(tests.values()))[0] == 0
+    assert all(t["grader_error"] is False for t in tests.values())
+    assert all("not implemented yet" in t["reason"] for t in tests.values()), \
+        [t["reason"] for t in tests.values()]
+
+
+@pytest.mark.parametrize("exercise, case", REJECTED, ids=[f"{e}-{c}" for e, c in REJECTED])
+def test_wrong_submission_loses_its_points(graded, exercise, case):
+    """A wrong submission fails the tests it should, each with a one-line reason saying what is wrong."""
+    tests = _tests(graded, exercise, case)
+    spec = CASES[exercise][case]
+    for test, reason in spec["fails"].items():
+        assert not tests[test]["passed"], f"{test} should fail"
+        assert reason in tests[test]["reason"], tests[test]["reason"]
+        assert "\n" not in tests[test]["reason"]
+    for test in spec.get("passes", []):
+        assert tests[test]["passed"], f"{test} should pass: {tests[test]['reason']}"
+    score, max_score = score_of(list(tests.values()))
+    assert score < max_score
+
+
+@pytest.mark.parametrize("exercise, case", CORRECT, ids=[f"{e}-{c}" for e, c in CORRECT])
+def test_correct_variant_scores_full_marks(graded, exercise, case):
+    """Correct code written differently from the master scores full marks."""
+    tests = _tests(graded, exercise, case)
+    assert all(t["passed"] for t in tests.values()), {k: t["reason"] for k, t in tests.items() if not t["passed"]}
