@@ -1,6 +1,8 @@
 """The notebooks run top to bottom in a fresh Jupyter kernel (nbclient).
 
-* lectures and masters (``solutions/``) must run without any error;
+* lectures and masters (``solutions/``) must run without any error; a lecture
+  embeds at least one animation player (it is executed once per session, see
+  ``executed_lecture`` in ``conftest.py``, and the course-site test reuses it);
 * a released exercise is run too, with errors allowed: its solution cells
   raise ``NotImplementedError`` by design, so the test asserts that the first
   error of the notebook is a ``NotImplementedError`` (nothing breaks before
@@ -18,7 +20,8 @@ import pytest
 from nbclient import NotebookClient
 
 ROOT = Path(__file__).resolve().parents[1]
-CLEAN = sorted((ROOT / "lectures").glob("*.ipynb")) + sorted((ROOT / "solutions").glob("*.ipynb"))
+LECTURES = sorted((ROOT / "lectures").glob("[0-9][0-9]_*.ipynb"))
+MASTERS = sorted((ROOT / "solutions").glob("*.ipynb"))
 EXERCISES = sorted((ROOT / "exercises").glob("*.ipynb"))
 
 
@@ -35,15 +38,27 @@ def _errors(nb):
             for o in c.get("outputs", []) if o.get("output_type") == "error"]
 
 
-@pytest.mark.parametrize("path", CLEAN, ids=[f"{p.parent.name}/{p.name}" for p in CLEAN])
-def test_notebook_runs_clean(path):
-    """A lecture or master notebook runs top to bottom in a fresh kernel without errors."""
+def _players(nb):
+    return [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
+            if "<script" in o.get("data", {}).get("text/html", "")]
+
+
+@pytest.mark.parametrize("path", LECTURES, ids=[p.name for p in LECTURES])
+def test_lecture_runs_clean_with_an_animation(path, executed_lecture):
+    """A lecture runs top to bottom in a fresh kernel without errors and embeds an animation player."""
+    nb = executed_lecture(path)
+    assert _errors(nb) == []
+    assert _players(nb), f"{path.name}: no embedded HTML/JS animation player"
+
+
+@pytest.mark.parametrize("path", MASTERS, ids=[p.name for p in MASTERS])
+def test_master_runs_clean(path):
+    """A master notebook runs without errors and its last cell reports full marks on the public tests."""
     nb = _run(path)
     assert _errors(nb) == []
-    if path.parent.name == "solutions":
-        last = "".join(o.get("data", {}).get("text/plain", "") + o.get("text", "")
-                       for o in nb.cells[-1].get("outputs", []))
-        assert "points on the public tests" in last and "All public tests pass" in last, last
+    last = "".join(o.get("data", {}).get("text/plain", "") + o.get("text", "")
+                   for o in nb.cells[-1].get("outputs", []))
+    assert "points on the public tests" in last and "All public tests pass" in last, last
 
 
 @pytest.mark.parametrize("path", EXERCISES, ids=[p.name for p in EXERCISES])

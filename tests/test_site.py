@@ -1,6 +1,8 @@
 """The course site: lectures executed, rendered in order, and loading cleanly in a browser."""
 
+import html
 import re
+from pathlib import Path
 
 import nbformat
 import pytest
@@ -8,6 +10,8 @@ import pytest
 from particles.site import build_site, lecture_notebooks, notebook_summary
 
 from .browser import find_or_install_chromium, load
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def notebook(title, *code):
@@ -85,3 +89,23 @@ def test_a_failing_script_is_reported(tmp_path):
     page = build_site(tmp_path / "site", bad, log=lambda *a: None)[1]
     _, errors = load(chromium, page)
     assert errors and "undefinedFunction" in " ".join(errors)
+
+
+def test_the_course_site_of_the_real_lectures_loads_cleanly(tmp_path, executed_lecture):
+    """The site of the course's own lectures: an index in lecture order, every page loading without
+    script errors, and every lecture's animation player running; linked exercises are copied."""
+    chromium = find_or_install_chromium()
+    paths = lecture_notebooks(ROOT / "lectures")
+    executed = {path.name: executed_lecture(path) for path in paths}
+    pages = build_site(tmp_path / "site", ROOT / "lectures", executed=executed, log=lambda *a: None)
+    assert [p.name for p in pages] == ["index.html"] + [p.with_suffix(".html").name for p in paths]
+    index = (tmp_path / "site" / "index.html").read_text()
+    titles = [notebook_summary(executed[p.name])[0] for p in paths]
+    assert [index.index(html.escape(t)) for t in titles] == sorted(index.index(html.escape(t)) for t in titles)
+    for page in pages:
+        dom, errors = load(chromium, page)
+        assert errors == [], (page.name, errors)
+        if page.name != "index.html":
+            assert re.search(r'<img[^>]*id="_anim_img\w+"[^>]*src="data:image/png;base64', dom), page.name
+            for link in re.findall(r'href="(exercises/[^"#]+)"', page.read_text()):
+                assert (tmp_path / "site" / link).is_file(), (page.name, link)
