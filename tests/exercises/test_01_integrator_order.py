@@ -1,0 +1,358 @@
+"""Autograder tests of exercise 01_integrator_order: four steppers and the measurement of their order.
+
+Public tests use fixed inputs a student can reason about (the circle field from
+(1, 0), a driven oscillator, made-up error sequences); hidden tests draw random
+states, shapes, times, problems and error sequences from the grading seed
+(fixture ``rng``). Every expected value comes from the reference library
+(``particles.integrators``, ``particles.studies.order``), computed here in the
+grader, never in the student's process.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from particles.course.expect import expect_array, expect_float, expect_order
+from particles.course.registry import remote
+from particles.course.runner import GradingFailure, describe_value
+from particles.integrators import euler, midpoint, rk4, trapezoid
+from particles.problems import get_problem
+from particles.studies.order import fit_order, global_error
+
+EXERCISE = "01_integrator_order"
+FORBIDDEN = {
+    "particles.integrators.euler": "it is the Euler step you are asked to write",
+    "particles.integrators.midpoint": "it is the midpoint step you are asked to write",
+    "particles.integrators.trapezoid": "it is the trapezoid step you are asked to write",
+    "particles.integrators.rk4": "it is the RK4 step you are asked to write",
+    "particles.integrators.INTEGRATORS": "it holds the library's own steppers; write the steps yourself",
+    "particles.integrators.integrate": "it is the time loop of the convergence study; write the loop yourself",
+    "particles.studies.order.fit_order": "it is the least-squares slope you are asked to write",
+    "particles.studies.order.global_error": "it is the global error you are asked to compute",
+    "particles.studies.order.convergence_study": "it is the whole convergence study you are asked to write",
+}
+
+STEPS = {  # method -> (the student's function, the reference, its order, evaluations of f per step)
+    "euler": ("euler_step", euler, 1, 1),
+    "midpoint": ("midpoint_step", midpoint, 2, 2),
+    "trapezoid": ("trapezoid_step", trapezoid, 2, 2),
+    "rk4": ("rk4_step", rk4, 4, 4),
+}
+METHODS = list(STEPS)
+
+# Numbers of steps of the order tests: in the asymptotic range of each method on every problem
+# the hidden tests draw (checked against the reference below), and fast: at most 3000 steps.
+N_STEPS = {"euler": [200, 400, 800, 1600], "midpoint": [40, 80, 160, 320],
+           "trapezoid": [40, 80, 160, 320], "rk4": [20, 40, 80, 160]}
+ORDER_TOLERANCE = 0.15
+
+
+# -- helpers -----------------------------------------------------------------------------------
+
+
+def _wrong_steps(method, f, X, t, h):
+    """Typical wrong answers for one step of `method`: label -> the state they give."""
+    f0 = f(X, t)
+    wrong = {}
+    if method == "euler":
+        wrong["a midpoint step"] = midpoint(f, X, t, h)
+        wrong["an Euler step with f evaluated at t + h instead of t"] = X + h * f(X, t + h)
+        return wrong
+    wrong["an Euler step"] = X + h * f0
+    if method == "midpoint":
+        wrong["a midpoint step that evaluates f at t instead of t + h/2"] = X + h * f(X + 0.5 * h * f0, t)
+        wrong["a midpoint step that evaluates f at t + h instead of t + h/2"] = X + h * f(X + 0.5 * h * f0, t + h)
+        wrong["a midpoint step that goes a full Euler step (not h/2) to the midpoint"] = \
+            X + h * f(X + h * f0, t + 0.5 * h)
+        wrong["a trapezoid step"] = trapezoid(f, X, t, h)
+    elif method == "trapezoid":
+        f1 = f(X + h * f0, t + h)
+        wrong["a trapezoid step without the factor 1/2, X + h (f_0 + f_1)"] = X + h * (f0 + f1)
+        wrong["a trapezoid step that evaluates f_1 at t instead of t + h"] = X + 0.5 * h * (f0 + f(X + h * f0, t))
+        wrong["a step with the end slope f_1 only"] = X + h * f1
+        wrong["a midpoint step"] = midpoint(f, X, t, h)
+    else:
+        k1 = f0
+        k2 = f(X + 0.5 * h * k1, t + 0.5 * h)
+        k3 = f(X + 0.5 * h * k2, t + 0.5 * h)
+        k4 = f(X + h * k3, t + h)
+        wrong["an RK4 step with the weights (1, 1, 1, 1)/4 instead of (1, 2, 2, 1)/6"] = \
+            X + h / 4 * (k1 + k2 + k3 + k4)
+        wrong["an RK4 step that divides by 4 instead of 6"] = X + h / 4 * (k1 + 2 * k2 + 2 * k3 + k4)
+        wrong["an RK4 step with k4 taken at X + h k2 instead of X + h k3"] = \
+            X + h / 6 * (k1 + 2 * k2 + 2 * k3 + f(X + h * k2, t + h))
+        wrong["an RK4 step with k3 taken at X + h/2 k1 instead of X + h/2 k2"] = \
+            X + h / 6 * (k1 + 4 * k2 + f(X + h * k2, t + h))
+        wrong["a midpoint step"] = midpoint(f, X, t, h)
+    return wrong
+
+
+def _check_step(student, method, f, X, t, h, where, check_inputs=False, count=False):
+    """One step of the student's stepper against the reference, with hints for typical slips."""
+    name, reference, _, evaluations = STEPS[method]
+    call = f"{name}(f, X of shape {X.shape}, t={t:.4g}, h={h:.4g}) on {where}"
+    got = student.call(name, f, X, t, h, check_inputs=check_inputs)
+    expect_array(got, reference(f, X, t, h), call, hints=_wrong_steps(method, f, X, t, h))
+    if count and student.calls_of(0) != evaluations:
+        raise GradingFailure(f"{name} evaluated f {student.calls_of(0)} times in one step; the {method} method "
+                             f"uses exactly {evaluations}")
+
+
+def _random_problem(rng, name):
+    """Random parameters of problem `name` (an end time included)."""
+    if name == "circle":
+        a, r = rng.uniform(0.0, 2 * np.pi), rng.uniform(0.5, 2.0)
+        return {"X0": [r * math.cos(a), r * math.sin(a)], "t1": rng.uniform(2.0, 6.0)}
+    if name == "harmonic_oscillator":
+        return {"omega": rng.uniform(0.5, 2.5), "x0": rng.uniform(-2.0, 2.0), "v0": rng.uniform(-2.0, 2.0),
+                "t1": rng.uniform(2.0, 6.0)}
+    if name == "projectile_drag":
+        return {"g": rng.uniform(5.0, 15.0), "c": rng.uniform(0.2, 2.0), "v0": rng.uniform(-5.0, 10.0, 2).tolist(),
+                "t1": rng.uniform(1.0, 3.0)}
+    omega = rng.uniform(0.5, 2.5)
+    return {"omega": omega, "amplitude": rng.uniform(0.5, 2.0), "frequency": omega + rng.uniform(0.5, 1.5),
+            "x0": rng.uniform(-2.0, 2.0), "v0": rng.uniform(-2.0, 2.0), "t1": rng.uniform(2.0, 6.0)}
+
+
+def _reference_order(problem, method, n_steps):
+    h = (problem.t1 - problem.t0) / np.asarray(n_steps, dtype=float)
+    return fit_order(h, [global_error(problem, method, int(n)) for n in n_steps])
+
+
+def _clean_problem(rng, name, method):
+    """Random parameters on which the reference stepper shows its order within 0.05.
+
+    Some draws (an error constant that nearly vanishes at t1, a step too coarse
+    for a fast oscillator) would make a correct submission miss its order; the
+    grader redraws those, so a failure is always the submission's.
+    """
+    for _ in range(50):
+        params = _random_problem(rng, name)
+        order = _reference_order(get_problem(name, **params), method, N_STEPS[method])
+        if abs(order - STEPS[method][2]) < 0.05:
+            return params
+    raise RuntimeError(f"no clean {name} problem for {method} in 50 draws")
+
+
+_LABELS = {"circle": "the circle field", "harmonic_oscillator": "the harmonic oscillator",
+           "projectile_drag": "the projectile with drag", "forced_oscillator": "the driven oscillator"}
+
+
+def _diagnosis(student, method):
+    """Why a measured order is off: the step itself, or the study around it."""
+    name, reference, _, _ = STEPS[method]
+    f = remote("forced_oscillator", omega=1.7, amplitude=1.3, frequency=2.9)
+    X = np.array([[[0.8, -0.3], [0.4, 1.1]], [[-1.2, 0.5], [0.2, -0.7]]])
+    try:
+        got = student.call(name, f, X, 0.35, 0.05)
+        expect_array(got, reference(f, X, 0.35, 0.05), name)
+    except GradingFailure:
+        return f"; one step of your {name} does not match the reference, see the tests of {name}"
+    return (f"; your {name} matches the reference on a single step, so look at convergence_errors "
+            "(the loop and the error) and observed_order (the slope)")
+
+
+def _judge_order(student, method, name, params):
+    """measured_order(method, ...) of the student on problem `name`, judged against the method's order."""
+    f, exact = remote(name, **params), remote(name, attr="exact", **params)
+    problem = f.problem
+    n_steps = N_STEPS[method]
+    got = student.call("measured_order", method, f, problem.X0, problem.t0, problem.t1, exact, n_steps)
+    call = (f"measured_order('{method}', f, X0, t0={problem.t0:g}, t1={problem.t1:.3g}, exact, "
+            f"n_steps={n_steps}) on {_LABELS[name]}")
+    if isinstance(got, np.ndarray) and got.shape == ():
+        got = got[()]
+    if isinstance(got, (bool, np.bool_)) or not isinstance(got, (int, float, np.integer, np.floating)):
+        raise GradingFailure(f"{call} returned {describe_value(got)}, expected a number")
+    try:
+        expect_order(float(got), STEPS[method][2], f"your {method} step ({call})", tolerance=ORDER_TOLERANCE)
+    except GradingFailure as failure:
+        raise GradingFailure(str(failure) + _diagnosis(student, method)) from None
+
+
+def _reference_final(step, f, X0, t0, t1, N):
+    h = (t1 - t0) / N
+    X = np.asarray(X0, dtype=float)
+    for k in range(N):
+        X = step(f, X, t0 + k * h, h)
+    return X
+
+
+def _check_errors(student, method, name, params, n_steps, check_inputs=False):
+    """convergence_errors(method, ...) of the student against the reference global errors."""
+    f, exact = remote(name, **params), remote(name, attr="exact", **params)
+    problem = f.problem
+    X0, t0, t1 = problem.X0, problem.t0, problem.t1
+    call = (f"convergence_errors('{method}', f, X0 of shape {X0.shape}, t0={t0:g}, t1={t1:.3g}, exact, "
+            f"n_steps={list(n_steps)}) on {_LABELS[name]}")
+    got = student.call("convergence_errors", method, f, X0, t0, t1, exact, list(n_steps), check_inputs=check_inputs)
+    if not isinstance(got, (tuple, list)) or len(got) != 2:
+        kind = f"a {type(got).__name__} of {len(got)} values" if isinstance(got, (tuple, list)) else describe_value(got)
+        raise GradingFailure(f"{call} returned {kind}, expected the tuple (h, errors)")
+    n = np.asarray(n_steps, dtype=float)
+    expect_array(np.asarray(got[0]) if isinstance(got[0], list) else got[0], (t1 - t0) / n,
+                 f"the step sizes h of {call}", rtol=1e-12)
+    expected = np.array([global_error(problem, method, int(k)) for k in n_steps])
+    step, X1 = STEPS[method][1], exact(t1)
+    finals = {k: _reference_final(step, f, X0, t0, t1, int(k)) for k in n_steps}
+    more = {k: step(f, finals[k], t1, (t1 - t0) / k) for k in n_steps}
+    hints = {
+        "the Euclidean norm of X_N - X(t1) instead of its largest component":
+            [np.linalg.norm((finals[k] - X1).ravel()) for k in n_steps],
+        "the largest component of X_N - X(t1) with its sign, not its absolute value":
+            [np.max(finals[k] - X1) for k in n_steps],
+        "the errors after N + 1 steps instead of N": [np.max(np.abs(more[k] - exact(t1 + (t1 - t0) / k)))
+                                                      for k in n_steps],
+    }
+    errors = np.asarray(got[1]) if isinstance(got[1], list) else got[1]
+    try:
+        expect_array(errors, expected, f"the errors of {call}", rtol=1e-6, atol=1e-13, hints=hints)
+    except GradingFailure as failure:
+        raise GradingFailure(str(failure) + _diagnosis(student, method)) from None
+
+
+def _slope_hints(h, e):
+    """Typical wrong slopes for the error sequence e(h): label -> value."""
+    u, w = np.log(h), np.log(e)
+    p = fit_order(h, e)
+    return {
+        "the slope between the first two points only": (w[1] - w[0]) / (u[1] - u[0]),
+        "the slope between the first and the last point only": (w[-1] - w[0]) / (u[-1] - u[0]),
+        "the mean of the slopes between neighbouring points": float(np.mean(np.diff(w) / np.diff(u))),
+        "the least-squares slope with log10 on one axis and ln on the other": p / math.log(10),
+        "the least-squares slope with ln on one axis and log10 on the other": p * math.log(10),
+        "the slope of log(h) against log(error), the axes swapped": float(np.polyfit(w, u, 1)[0]),
+        "minus the slope": -p,
+        "the slope of the errors against h without logarithms": float(np.polyfit(h, e, 1)[0]),
+    }
+
+
+def _check_slope(student, h, e, call, check_inputs=False):
+    got = student.call("observed_order", h, e, check_inputs=check_inputs)
+    expected = fit_order(h, e)
+    try:
+        expect_float(got, expected, call, rtol=1e-8, atol=1e-10)
+    except GradingFailure as failure:
+        message = str(failure)
+        if isinstance(got, np.ndarray) and got.shape == ():
+            got = got[()]
+        if isinstance(got, (int, float, np.integer, np.floating)) and not isinstance(got, (bool, np.bool_)):
+            for label, wrong in _slope_hints(h, e).items():
+                if abs(float(got) - wrong) <= 1e-8 * abs(wrong) + 1e-10:
+                    message += f"; your result matches {label}"
+                    break
+        raise GradingFailure(message) from None
+
+
+# -- the steppers ------------------------------------------------------------------------------
+
+
+@pytest.mark.points(1)
+@pytest.mark.parametrize("method", METHODS)
+def test_step_circle(student, method):
+    """One step of each stepper on the circle field f = (-y, x) from (1, 0) with h = 0.1."""
+    _check_step(student, method, remote("circle"), np.array([1.0, 0.0]), 0.0, 0.1, "the circle field")
+
+
+@pytest.mark.points(1)
+@pytest.mark.parametrize("method", METHODS)
+def test_step_driven_particles(student, method):
+    """One step on three particles in 2D driven in time: right values, X unchanged, right number of evaluations."""
+    f = remote("forced_oscillator", omega=2.0, amplitude=1.5, frequency=3.0)
+    X = np.array([[[1.0, 0.0], [0.0, 1.0]], [[0.5, -0.5], [2.0, 0.0]], [[-1.0, 0.25], [0.0, -1.0]]])
+    _check_step(student, method, f, X, 0.7, 0.1, "the driven oscillator with omega = 2, A = 1.5, Omega = 3",
+                check_inputs=True, count=True)
+
+
+@pytest.mark.points(2)
+@pytest.mark.hidden
+@pytest.mark.parametrize("method", METHODS)
+def test_step_random(student, rng, method):
+    """Each stepper matches the reference on random states of several shapes, times and steps."""
+    for name in ["forced_oscillator", "forced_oscillator", "projectile_drag", "harmonic_oscillator", "circle"]:
+        t, h = rng.uniform(0.0, 10.0), rng.uniform(0.001, 0.3)
+        n, d = int(rng.integers(1, 6)), int(rng.integers(1, 4))
+        if name == "circle":
+            f, X = remote("circle"), rng.normal(size=2)
+        elif name == "projectile_drag":
+            f = remote("projectile_drag", g=rng.uniform(5.0, 15.0), c=rng.uniform(0.1, 2.0))
+            X = rng.normal(size=(n, 2, 2))
+        elif name == "harmonic_oscillator":
+            f, X = remote("harmonic_oscillator", omega=rng.uniform(0.5, 3.0)), rng.normal(size=(n, 2, d))
+        else:
+            omega = rng.uniform(0.5, 3.0)
+            f = remote("forced_oscillator", omega=omega, amplitude=rng.uniform(0.5, 2.0),
+                       frequency=omega + rng.uniform(0.5, 2.0))
+            X = rng.normal(size=(n, 2, d) if rng.random() < 0.5 else (n, 2))
+        _check_step(student, method, f, X, t, h, _LABELS[name], check_inputs=True)
+
+
+# -- the global errors -------------------------------------------------------------------------
+
+
+@pytest.mark.points(1)
+def test_convergence_errors_circle(student):
+    """convergence_errors gives h = 5/N and Euler's max-norm errors at t1 = 5 s on the circle field."""
+    _check_errors(student, "euler", "circle", {"X0": [1.0, 0.0], "t1": 5.0}, [20, 40, 80], check_inputs=True)
+
+
+@pytest.mark.points(2)
+@pytest.mark.hidden
+def test_convergence_errors_random(student, rng):
+    """convergence_errors matches the reference global errors on random problems, methods and step counts."""
+    for name in ["forced_oscillator", "projectile_drag", str(rng.choice(["circle", "harmonic_oscillator"]))]:
+        method = str(rng.choice(["euler", "midpoint", "trapezoid"]))
+        n_steps = sorted(int(k) for k in rng.choice(np.arange(5, 150), size=3, replace=False))
+        _check_errors(student, method, name, _random_problem(rng, name), n_steps, check_inputs=True)
+
+
+# -- the slope ---------------------------------------------------------------------------------
+
+
+@pytest.mark.points(1)
+def test_observed_order_exact_powers(student):
+    """observed_order returns 2 for errors exactly 3 h^2 at h = 0.1, 0.05, 0.025, 0.0125."""
+    h = np.array([0.1, 0.05, 0.025, 0.0125])
+    _check_slope(student, h, 3 * h**2, "observed_order(h=[0.1, 0.05, 0.025, 0.0125], errors=3 h^2)")
+
+
+@pytest.mark.points(1)
+def test_observed_order_noisy(student):
+    """observed_order fits the least-squares slope through all points of a noisy error sequence."""
+    h = np.array([0.2, 0.1, 0.05, 0.025])
+    e = np.array([0.031, 0.0088, 0.0021, 0.00052])
+    _check_slope(student, h, e, "observed_order(h=[0.2, 0.1, 0.05, 0.025], errors=[0.031, 0.0088, 0.0021, 0.00052])",
+                 check_inputs=True)
+
+
+@pytest.mark.points(2)
+@pytest.mark.hidden
+def test_observed_order_random(student, rng):
+    """observed_order matches the reference least-squares slope on random noisy, unevenly spaced sequences."""
+    for _ in range(3):
+        m = int(rng.integers(4, 8))
+        h = rng.uniform(0.05, 0.5) * np.cumprod(np.r_[1.0, rng.uniform(0.3, 0.8, m - 1)])
+        p, C = rng.uniform(0.5, 4.5), math.exp(rng.uniform(-3.0, 3.0))
+        e = C * h**p * np.exp(rng.normal(0.0, 0.15, m))
+        _check_slope(student, h, e, f"observed_order on {m} random step sizes with errors ~ C h^{p:.2f} (with noise)",
+                     check_inputs=True)
+
+
+# -- the measured orders -----------------------------------------------------------------------
+
+
+@pytest.mark.points(1)
+@pytest.mark.parametrize("method", METHODS)
+def test_measured_order_circle(student, method):
+    """measured_order finds the order of each stepper (1, 2, 2, 4) on the circle field up to t1 = 5 s."""
+    _judge_order(student, method, "circle", {"X0": [1.0, 0.0], "t1": 5.0})
+
+
+@pytest.mark.points(2)
+@pytest.mark.hidden
+@pytest.mark.parametrize("method", METHODS)
+def test_measured_order_random(student, rng, method):
+    """measured_order finds each stepper's order on a random driven oscillator and one other random problem."""
+    for name in ["forced_oscillator", str(rng.choice(["circle", "harmonic_oscillator", "projectile_drag"]))]:
+        _judge_order(student, method, name, _clean_problem(rng, name, method))
