@@ -1,0 +1,399 @@
+"""Autograder tests of exercise 03_provot: Provot's deformation constraint on a cloth.
+
+Public tests use a few springs whose answer a student can work out by hand;
+hidden tests build random cloths from ``particles.massspring.cloth`` (random
+size, plane, pins and stretched positions; springs shuffled and their ends
+swapped) from the grading seed (fixture ``rng``). Every expected value comes
+from the reference library, computed here in the grader.
+
+Tolerances. One Jacobi pass starts from random positions, so the grader's
+reference ``provot_projection(..., iterations=1, tol=0)`` and the student's
+pass agree to rounding (1e-9 relative, 1e-12 m). After a pass, a spring that
+was corrected alone sits at ``(1 + s) L0`` to within an ulp; whether the next
+pass counts it as too long then depends on rounding, and it changes the
+average at its particles. On such cloths a correct projection can differ from
+the reference by up to a few per cent of a rest length, so the full
+projection is compared with the reference (to 1e-9 of the smallest rest
+length) only on cloths where no pass hinges on rounding, which the grader
+checks by replaying the reference pass by pass; on any cloth the properties
+are checked: every spring with a free end within ``max_strain + tol``
+(+1e-9), pins exactly where they were, inputs unchanged, at most
+``iterations`` passes, none when nothing is too long.
+"""
+
+import numpy as np
+import pytest
+
+from particles.constraints import provot_projection
+from particles.course.expect import expect_array, expect_float
+from particles.course.runner import GradingFailure, describe_value
+from particles.massspring import cloth
+
+EXERCISE = "03_provot"
+FORBIDDEN = {
+    "particles.constraints.provot_projection": "it is the projection you are asked to write",
+    "particles.constraints.ProvotConstraint": "it applies the projection you are asked to write",
+    "particles.constraints._correct": "it is the library's own Jacobi pass; write the pass with NumPy",
+    "particles.studies.provot": "it runs the curtain study you are asked to build",
+    "particles.springs.Springs": "compute the spring lengths and strains yourself with NumPy",
+    "particles.massspring.MassSpringSystem": "its strain and max_strain are what you are asked to write",
+}
+
+ROUNDING = 1e-9  # slack on the strain limit and on agreement, relative
+
+
+# -- building cloths ---------------------------------------------------------------------------
+
+
+def _random_cloth(rng, kinds=("structural", "shear"), pinned_pair=None, stretch=1.5):
+    """A random stretched cloth: positions x, springs ij (shuffled, ends swapped), rest lengths, free mask.
+
+    Pinned particles stay at their rest positions, so that a configuration within the limit exists;
+    with `pinned_pair`, two neighbours are pinned with their spring stretched by 30%.
+    """
+    nx, ny = (int(k) for k in rng.integers(3, 9, 2))
+    c = cloth(nx, ny, width=rng.uniform(0.5, 2.0), height=rng.uniform(0.5, 2.0),
+              plane=str(rng.choice(["vertical", "horizontal"])), pins=None)
+    ij = np.concatenate([c.springs[k].indices for k in kinds])
+    L0 = np.concatenate([c.springs[k].rest_length for k in kinds])
+    order = rng.permutation(len(ij))
+    ij, L0 = ij[order], L0[order]
+    swap = rng.random(len(ij)) < 0.5
+    ij[swap] = ij[swap][:, ::-1]
+    x0 = c.X[:, 0].copy()
+    free = np.ones(c.n, dtype=bool)
+    free[rng.choice(c.n, int(rng.integers(0, 6)), replace=False)] = False
+    if pinned_pair is None:
+        pinned_pair = rng.random() < 0.4
+    if pinned_pair:
+        a, b = ij[int(rng.integers(len(ij)))]
+        free[[a, b]] = False
+        x0[b] = x0[a] + 1.3 * (x0[b] - x0[a])
+    x = x0 * rng.uniform(1.0, stretch, 3) + rng.normal(0.0, 0.15 * L0.min(), x0.shape)
+    x[~free] = x0[~free]
+    return x, ij, L0, free
+
+
+def _curtain_springs(n=6):
+    c = cloth(n, n, plane="horizontal")
+    ij = np.concatenate([c.springs[k].indices for k in ("structural", "shear")])
+    L0 = np.concatenate([c.springs[k].rest_length for k in ("structural", "shear")])
+    return c, ij, L0
+
+
+def _strain(x, ij, L0):
+    return np.linalg.norm(x[ij[:, 0]] - x[ij[:, 1]], axis=1) / L0 - 1.0
+
+
+def _replay(x, ij, L0, free, s, iterations, tol):
+    """The reference projection replayed pass by pass; also whether any pass hinges on rounding.
+
+    A pass hinges on rounding when a spring is within 1e-10 of its limit (it may or may not count as
+    too long) at a free particle that also has a clearly too-long spring (the count of the average
+    changes), or when the stopping test is within 1e-9 of its threshold.
+    """
+    i, j = ij[:, 0], ij[:, 1]
+    movable = free[i] | free[j]
+    limit = (1.0 + s) * L0
+    fragile = False
+    for passes in range(iterations + 1):
+        L = np.linalg.norm(x[i] - x[j], axis=1)
+        worst = float(np.max((L / L0 - 1.0)[movable], initial=0.0))
+        fragile |= abs(worst - (s + tol)) < 1e-9
+        if worst <= s + tol + 1e-12 or passes == iterations:
+            break
+        near = movable & (np.abs(L / limit - 1.0) < 1e-10)
+        long = movable & (L > limit * (1.0 + 1e-10))
+        count = np.bincount(i[long], minlength=len(x)) + np.bincount(j[long], minlength=len(x))
+        fragile |= bool(np.any(near & ((free[i] & (count[i] > 0)) | (free[j] & (count[j] > 0)))))
+        x = provot_projection(x, ij, L0, free, s, iterations=1, tol=0.0).x
+    return x, passes, fragile
+
+
+def _robust_cloth(rng, iterations, tries=40, **options):
+    """A random cloth on which the reference does not hinge on rounding (and converges if it may)."""
+    for _ in range(tries):
+        x, ij, L0, free = _random_cloth(rng, **options)
+        s, tol = rng.uniform(0.05, 0.2), rng.uniform(0.002, 0.01)
+        x_ref, passes, fragile = _replay(x, ij, L0, free, s, iterations, tol)
+        converged = np.max(_strain(x_ref, ij, L0)[free[ij[:, 0]] | free[ij[:, 1]]], initial=0.0) <= s + tol + 1e-12
+        if not fragile and (converged or passes == iterations):
+            ref = provot_projection(x, ij, L0, free, s, iterations, tol)
+            assert np.array_equal(ref.x, x_ref) and ref.iterations == passes  # the replay is the reference
+            return x, ij, L0, free, s, tol, ref
+    raise AssertionError("no robust random cloth found")  # pragma: no cover (a grader bug, not the student's)
+
+
+def _describe(x, ij, free, s):
+    return (f"a cloth of {len(x)} particles, {len(ij)} springs, {int((~free).sum())} pinned, "
+            f"max_strain={s:.3g}")
+
+
+# -- common checks -----------------------------------------------------------------------------
+
+
+def _expect_pair(got, call):
+    if not isinstance(got, tuple) or len(got) != 2:
+        kind = describe_value(got) if not isinstance(got, tuple) else f"a tuple of {len(got)} values"
+        raise GradingFailure(f"{call} returned {kind}, expected the tuple (x_new, passes)")
+    x_new, passes = got
+    if isinstance(passes, (bool, np.bool_)) or not isinstance(passes, (int, np.integer)):
+        raise GradingFailure(f"{call} returned passes = {describe_value(passes)}, expected an int")
+    return x_new, int(passes)
+
+
+def _expect_pins_fixed(x_new, x, free, call):
+    moved = np.flatnonzero(~free & np.any(x_new != x, axis=1)) if x_new.shape == x.shape else []
+    if len(moved):
+        k = int(moved[0])
+        raise GradingFailure(f"{call} moved pinned particle {k} from {np.round(x[k], 4).tolist()} to "
+                             f"{np.round(x_new[k], 4).tolist()}; pinned particles never move")
+
+
+def _expect_within_limit(x_new, ij, L0, free, s, tol, call):
+    movable = free[ij[:, 0]] | free[ij[:, 1]]
+    strain = _strain(x_new, ij, L0)
+    over = movable & (strain > s + tol + ROUNDING)
+    if over.any():
+        k = int(np.argmax(np.where(over, strain, -np.inf)))
+        raise GradingFailure(f"{call}: after your projection spring {k} {ij[k].tolist()} still has strain "
+                             f"{100 * strain[k]:.3f}%, above max_strain + tol = {100 * (s + tol):.3f}%")
+
+
+# -- spring_strain -----------------------------------------------------------------------------
+
+
+@pytest.mark.points(1)
+def test_spring_strain_three_springs(student):
+    """spring_strain gives +50%, 0 and -50% for a stretched, a relaxed and a compressed spring."""
+    x = np.array([[0.0, 0.0], [1.5, 0.0], [1.5, 2.0], [0.0, 0.0]])
+    ij = np.array([[0, 1], [2, 1], [3, 2]])
+    L0 = np.array([1.0, 2.0, 5.0])
+    got = student.call("spring_strain", x, ij, L0, check_inputs=True)
+    expect_array(got, [0.5, 0.0, 2.5 / 5.0 - 1.0], "spring_strain(x, [[0, 1], [2, 1], [3, 2]], L0=[1, 2, 5])")
+
+
+@pytest.mark.points(1)
+@pytest.mark.hidden
+def test_spring_strain_random_cloth(student, rng):
+    """spring_strain matches the library's strain on a random stretched cloth, in 2D and 3D."""
+    x, ij, L0, free = _random_cloth(rng)
+    for x_test in (x, x[:, :2]):
+        expect_array(student.call("spring_strain", x_test, ij, L0, check_inputs=True), _strain(x_test, ij, L0),
+                     f"spring_strain on a random cloth of {len(ij)} springs in {x_test.shape[1]}D")
+
+
+# -- max_strain_history ------------------------------------------------------------------------
+
+
+@pytest.mark.points(1)
+def test_max_strain_history_frames(student):
+    """max_strain_history gives the largest strain of each frame, 0 for a frame where all springs are compressed."""
+    L0 = np.array([1.0, 1.0])
+    ij = np.array([[0, 1], [1, 2]])
+    frames = [[0.0, 1.2, 2.2], [0.0, 0.9, 1.8], [0.0, 1.0, 2.5]]  # x of three particles on a line, per frame
+    X = np.zeros((3, 3, 2, 2))
+    X[:, :, 0, 0] = frames
+    got = student.call("max_strain_history", X, ij, L0, check_inputs=True)
+    expect_array(got, [0.2, 0.0, 0.5], "max_strain_history on 3 frames of 2 springs (strains [0.2, 0], "
+                 "[-0.1, -0.1], [0, 0.5])", hints={"the largest |strain| (compression counted)": [0.2, 0.1, 0.5]})
+
+
+@pytest.mark.points(2)
+@pytest.mark.hidden
+def test_max_strain_history_recorded_run(student, rng):
+    """max_strain_history matches MassSpringSystem.max_strain on each frame of a recorded cloth simulation."""
+    n = int(rng.integers(4, 8))
+    c = cloth(n, n, plane=str(rng.choice(["vertical", "horizontal"])), k_structural=rng.uniform(10.0, 50.0))
+    steps, h = int(rng.integers(20, 60)), 0.004
+    _, X = c.run(steps * h, h, method="symplectic_euler", every=int(rng.integers(1, 4)))
+    X[0, :, 0] *= 0.95  # a first frame where every spring is compressed
+    for kind in ("structural", "shear"):
+        springs = c.springs[kind]
+        expected = [c.max_strain(Xk, kind) for Xk in X]
+        got = student.call("max_strain_history", X, springs.indices, springs.rest_length, check_inputs=True)
+        expect_array(got, expected, f"max_strain_history on {len(X)} recorded frames of a {n} x {n} cloth "
+                     f"({kind} springs; frame 0 compressed)", rtol=1e-9)
+
+
+# -- provot_pass -------------------------------------------------------------------------------
+
+
+SPRING = np.array([[0.0, 0.0], [1.5, 0.0]])  # rest length 1 m, stretched by 50%
+
+
+@pytest.mark.points(1)
+@pytest.mark.parametrize("ends", ["both free", "first pinned", "second pinned", "both pinned"])
+def test_provot_pass_one_spring(student, ends):
+    """provot_pass shortens one spring to (1 + s) L0: half the excess at each free end, all of it at the only free one."""
+    free = {"both free": [True, True], "first pinned": [False, True], "second pinned": [True, False],
+            "both pinned": [False, False]}[ends]
+    free = np.array(free)
+    call = f"provot_pass(x=[[0, 0], [1.5, 0]], [[0, 1]], L0=[1], free={free.tolist()}, max_strain=0.1)"
+    got = student.call("provot_pass", SPRING, np.array([[0, 1]]), np.array([1.0]), free, 0.1, check_inputs=True)
+    expected = provot_projection(SPRING, [[0, 1]], [1.0], free, 0.1, iterations=1, tol=0.0).x
+    if isinstance(got, np.ndarray) and got.shape == SPRING.shape:
+        _expect_pins_fixed(got, SPRING, free, call)
+        length = np.linalg.norm(got[1] - got[0])
+        if free.any() and abs(length - 1.0) < 1e-9:
+            raise GradingFailure(f"{call} shortened the spring to its rest length 1 m; Provot shortens it only to "
+                                 "(1 + max_strain) L0 = 1.1 m")
+        if free.all() and abs(length - 1.1) < 1e-9 and abs(got[:, 0].mean() - 0.75) > 1e-9:
+            raise GradingFailure(f"{call} moved the midpoint to x = {got[:, 0].mean():.4g} m; with both ends free "
+                                 "each end moves half the excess and the midpoint stays at 0.75 m")
+    expect_array(got, expected, call)
+
+
+@pytest.mark.points(2)
+def test_provot_pass_shared_particle(student):
+    """provot_pass averages the corrections at a particle shared by two too-long springs, and adds them all."""
+    x = np.array([[0.0, 0.0], [1.5, 0.0], [0.0, 1.5], [0.0, -1.2]])
+    ij = np.array([[0, 1], [0, 2], [3, 0]])  # particle 0 appears twice as a first end
+    L0 = np.ones(3)
+    free = np.array([True, False, False, False])
+    call = "provot_pass on three springs from particle 0 (free) to pinned 1, 2, 3, stretched by 50%, 50%, 20%"
+    got = student.call("provot_pass", x, ij, L0, free, 0.1, check_inputs=True)
+    expected = provot_projection(x, ij, L0, free, 0.1, iterations=1, tol=0.0).x
+    expect_array(got, expected, call, hints={
+        "the sum of the three corrections instead of their average": x + [[0.4, 0.3], [0, 0], [0, 0], [0, 0]],
+        "a lost correction (x[i] += c with a repeated index keeps only the last one)":
+            x + [[0.0, 0.1], [0, 0], [0, 0], [0, 0]],
+    })
+
+
+@pytest.mark.points(3)
+@pytest.mark.hidden
+def test_provot_pass_random_cloths(student, rng):
+    """provot_pass matches one reference Jacobi pass on random cloths (shuffled springs, random pins), pins fixed."""
+    for _ in range(3):
+        x, ij, L0, free = _random_cloth(rng, kinds=("structural", "shear", "flexion")[:int(rng.integers(2, 4))])
+        s = rng.uniform(0.02, 0.2)
+        if rng.random() < 0.5:
+            x = x[:, :2].copy()  # the pass works in any dimension
+        call = f"provot_pass on {_describe(x, ij, free, s)}, d = {x.shape[1]}"
+        got = student.call("provot_pass", x, ij, L0, free, s, check_inputs=True)
+        if isinstance(got, np.ndarray) and got.shape == x.shape:
+            _expect_pins_fixed(got, x, free, call)
+        expected = provot_projection(x, ij, L0, free, s, iterations=1, tol=0.0).x
+        expect_array(got, expected, call, rtol=ROUNDING)
+
+
+# -- provot_project ----------------------------------------------------------------------------
+
+
+@pytest.mark.points(2)
+def test_provot_project_chain(student):
+    """provot_project brings a stretched chain of 5 particles pinned at one end within the limit, like the reference."""
+    x = np.array([[0.0, 0.0], [1.4, 0.0], [2.6, 0.0], [4.0, 0.0], [5.0, 0.0]])
+    ij = np.array([[0, 1], [1, 2], [2, 3], [3, 4]])
+    L0, free = np.ones(4), np.array([False, True, True, True, True])
+    call = "provot_project on a chain [0, 1.4, 2.6, 4, 5] m, L0 = 1 m, particle 0 pinned, max_strain=0.1, tol=0.005"
+    x_new, passes = _expect_pair(student.call("provot_project", x, ij, L0, free, 0.1, 500, 0.005, check_inputs=True),
+                                 call)
+    ref = provot_projection(x, ij, L0, free, 0.1, 500, 0.005)
+    expect_array(x_new, ref.x, call, rtol=ROUNDING, atol=1e-9)
+    if passes != ref.iterations:
+        raise GradingFailure(f"{call} reported {passes} passes; the projection needs {ref.iterations} "
+                             "(stop as soon as every spring is within max_strain + tol, checked before each pass)")
+
+
+@pytest.mark.points(1)
+def test_provot_project_nothing_to_do(student):
+    """provot_project returns the positions unchanged and 0 passes when every spring already holds."""
+    c, ij, L0 = _curtain_springs()
+    x = c.X[:, 0] * 1.05  # 5% longer everywhere: within 10%
+    free = np.ones(c.n, dtype=bool)
+    x_new, passes = _expect_pair(student.call("provot_project", x, ij, L0, free, check_inputs=True),
+                                 "provot_project on a cloth stretched by 5% (within the limit)")
+    expect_array(x_new, x, "provot_project on a cloth stretched by 5% (nothing to correct)", rtol=0, atol=0)
+    if passes != 0:
+        raise GradingFailure(f"provot_project on a cloth stretched by 5% reported {passes} passes; nothing is too "
+                             "long, so it must stop before the first pass (0 passes)")
+
+
+@pytest.mark.points(3)
+@pytest.mark.hidden
+@pytest.mark.time_limit(10)
+def test_provot_project_agrees_with_reference(student, rng):
+    """provot_project matches the reference Jacobi projection (positions and passes) on random cloths, some capped."""
+    for cap in (500, 500, int(rng.integers(2, 12))):
+        x, ij, L0, free, s, tol, ref = _robust_cloth(rng, cap)
+        call = f"provot_project on {_describe(x, ij, free, s)}, iterations={cap}, tol={tol:.3g}"
+        x_new, passes = _expect_pair(student.call("provot_project", x, ij, L0, free, s, cap, tol, check_inputs=True),
+                                     call)
+        if isinstance(x_new, np.ndarray) and x_new.shape == x.shape:
+            _expect_pins_fixed(x_new, x, free, call)
+        expect_array(x_new, ref.x, call, rtol=0, atol=ROUNDING * L0.min())
+        if passes != ref.iterations:
+            raise GradingFailure(f"{call} reported {passes} passes, the reference made {ref.iterations}")
+
+
+@pytest.mark.points(2)
+@pytest.mark.hidden
+@pytest.mark.time_limit(10)
+def test_provot_project_properties(student, rng):
+    """On any random cloth, provot_project keeps pins exactly, leaves every spring within the limit and stops early."""
+    for pinned_pair in (True, False, True):
+        while True:
+            x, ij, L0, free = _random_cloth(rng, pinned_pair=pinned_pair)
+            s, tol = rng.uniform(0.05, 0.2), rng.uniform(0.002, 0.01)
+            ref = provot_projection(x, ij, L0, free, s, 500, tol)
+            if ref.converged and ref.iterations > 1:
+                break
+        call = f"provot_project on {_describe(x, ij, free, s)}, tol={tol:.3g}"
+        x_new, passes = _expect_pair(student.call("provot_project", x, ij, L0, free, s, 500, tol, check_inputs=True),
+                                     call)
+        if not isinstance(x_new, np.ndarray) or x_new.shape != x.shape or not np.isfinite(x_new).all():
+            expect_array(x_new, ref.x, call)  # says what is wrong with the array
+        _expect_pins_fixed(x_new, x, free, call)
+        _expect_within_limit(x_new, ij, L0, free, s, tol, call)
+        if passes >= 500:
+            raise GradingFailure(f"{call} made {passes} passes, the cap; the reference needed {ref.iterations}. Stop as "
+                                 "soon as every spring with a free end holds (springs with both ends pinned never do)")
+        if not 0.5 * ref.iterations <= passes <= 2 * ref.iterations + 1:
+            raise GradingFailure(f"{call} made {passes} passes, the reference needed {ref.iterations}")
+
+
+# -- constrain_state ---------------------------------------------------------------------------
+
+
+@pytest.mark.points(1)
+def test_constrain_state_one_spring(student):
+    """constrain_state moves the free end of a pinned spring back by 0.4 m and its velocity by -0.4 m / h."""
+    X = np.array([[[0.0, 0.0], [0.0, 0.0]], [[1.5, 0.0], [2.0, 1.0]]])
+    h = 0.01
+    call = "constrain_state(X, h=0.01) for a spring 0-1 of L0 = 1 m stretched to 1.5 m, particle 0 pinned"
+    got = student.call("constrain_state", X, h, np.array([[0, 1]]), np.array([1.0]), np.array([False, True]),
+                       check_inputs=True)
+    X_new, passes = _expect_pair(got, call)
+    expected = np.array([[[0.0, 0.0], [0.0, 0.0]], [[1.1, 0.0], [2.0 - 40.0, 1.0]]])
+    unchanged = expected.copy()
+    unchanged[1, 1] = X[1, 1]
+    expect_array(X_new, expected, call, hints={"the velocities left unchanged (v += dx / h is missing)": unchanged,
+                                               "v = dx / h (the velocity of the step replaced)": expected
+                                               - np.array([[[0, 0], [0, 0]], [[0, 0], [2.0, 1.0]]])})
+    if passes != 1:
+        raise GradingFailure(f"{call} reported {passes} passes, expected 1")
+
+
+@pytest.mark.points(2)
+@pytest.mark.hidden
+@pytest.mark.time_limit(10)
+def test_constrain_state_random_cloths(student, rng):
+    """constrain_state projects positions like the reference and adds dx / h to the velocities; pins keep v = 0."""
+    for cap in (500, int(rng.integers(2, 8))):
+        x, ij, L0, free, s, tol, ref = _robust_cloth(rng, cap)
+        h = rng.uniform(0.001, 0.02)
+        v = rng.normal(0.0, 0.5, x.shape)
+        v[~free] = 0.0
+        X = np.stack([x, v], axis=1)
+        call = f"constrain_state(X, h={h:.3g}) on {_describe(x, ij, free, s)}, iterations={cap}, tol={tol:.3g}"
+        X_new, passes = _expect_pair(student.call("constrain_state", X, h, ij, L0, free, s, cap, tol,
+                                                  check_inputs=True), call)
+        expected = np.stack([ref.x, v + (ref.x - x) / h], axis=1)
+        stale = np.stack([ref.x, v], axis=1)
+        expect_array(X_new, expected, call, rtol=1e-9, atol=ROUNDING * L0.min() / h,
+                     hints={"the velocities left unchanged (v += dx / h is missing)": stale})
+        if passes != ref.iterations:
+            raise GradingFailure(f"{call} reported {passes} passes, the reference made {ref.iterations}")
+        expect_float(float(np.abs(X_new[~free, 1]).max(initial=0.0)), 0.0, f"the velocity of the pins after {call}")
