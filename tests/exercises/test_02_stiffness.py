@@ -1,0 +1,300 @@
+"""Autograder tests of exercise 02_stiffness: stability limits measured, implicit Euler, its damping, the cost.
+
+Public tests use the spring of the notebook (k = 100 N/m, m = 1 kg, omega = 10 rad/s); hidden tests draw
+stiffnesses, masses, chains and steps from the grading seed (fixture ``rng``). Every expected value comes
+from the reference library, computed here in the grader: the theoretical limits and the measurements of
+``particles.studies.stability``, ``particles.massspring.string(...).max_stable_step()`` for a chain,
+``particles.integrators.implicit_euler`` for the implicit step. A measured limit must be within 5% of theory.
+"""
+
+import numpy as np
+import pytest
+
+from particles.course.expect import expect_array
+from particles.course.runner import GradingFailure, describe_value
+from particles.integrators import euler, implicit_euler, symplectic_euler
+from particles.massspring import string
+from particles.studies import stability
+
+EXERCISE = "02_stiffness"
+_MEASURE = "measuring the limit is what this exercise asks; write the blow-up test and the bisection yourself"
+FORBIDDEN = {
+    "particles.studies.stability.theory_max_step": "it gives the theoretical limit; measure it instead",
+    "particles.studies.stability.THEORY_OMEGA_H": "it holds the theoretical limits; measure them instead",
+    "particles.studies.stability.blows_up": _MEASURE,
+    "particles.studies.stability.max_stable_step": _MEASURE,
+    "particles.studies.stability.chain_max_stable_step": _MEASURE,
+    "particles.studies.stability.stability_study": _MEASURE,
+    "particles.studies.stability.damping_factor": "it is the damping measurement you are asked to write",
+    "particles.studies.stability.cost_study": "it is the cost table you are asked to write",
+    "particles.integrators.implicit_euler": "it is the implicit step you are asked to write (solve the 2 x 2 system by hand)",
+    "particles.integrators.integrate": "it stops a diverging run for you; write the loop and the amplitude test yourself",
+    "particles.massspring.string": "its max_stable_step() computes the chain's limit from theory; measure it instead",
+}
+
+STABLE = {"symplectic_euler": 2.0, "verlet": 2.0, "rk4": 2.0 * np.sqrt(2.0)}
+
+
+def _number(value, call):
+    """The float a student's function returned, or a GradingFailure saying what came back."""
+    if isinstance(value, np.ndarray) and value.shape == ():
+        value = value[()]
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise GradingFailure(f"{call} returned {describe_value(value)}, expected a number (a step in seconds)")
+    return float(value)
+
+
+def _check_limit(got, expected, omega, call, rtol=0.05, what="theory"):
+    """A measured step limit within `rtol` of `expected`, with the message in units of omega h."""
+    h = _number(got, call)
+    if not np.isfinite(h) or abs(h / expected - 1) > rtol:
+        message = (f"{call} returned {h:.4g} s, that is omega h_max = {omega * h:.3g}; expected about "
+                   f"{omega * expected:.3g} ({what}, within {100 * rtol:g}%)")
+        ratio = h / expected if np.isfinite(h) and expected > 0 else np.nan
+        if np.isfinite(ratio) and ratio > 0 and abs(np.log(ratio) / np.log(omega) + 1) < 0.05 and abs(np.log(omega)) > 1:
+            message += "; your step scales like m/k instead of sqrt(m/k) (use omega = sqrt(k/m))"
+        elif h == 0.0:
+            message += ("; 0.0 means 'no stable step': did the check of 0.9 h over 4 times the steps blow up "
+                        "because the step your bisection returned is not stable?")
+        elif h > expected * (1 + rtol):
+            message += "; steps above the limit pass your test (too short a test, or the bracket's upper end returned?)"
+        raise GradingFailure(message)
+
+
+def _blows_up(student, method, k, m, h, steps):
+    got = student.call("blows_up", method, k, m, h, steps, timeout=10)
+    if not isinstance(got, (bool, np.bool_)):
+        raise GradingFailure(f"blows_up({method!r}, k={k:.3g}, m={m:.3g}, h={h:.3g}, steps={steps}) returned "
+                             f"{describe_value(got)}, expected True or False")
+    return bool(got)
+
+
+# -- blows_up ----------------------------------------------------------------------------------
+
+
+@pytest.mark.points(1)
+def test_blows_up_around_the_limits(student):
+    """blows_up tells stable from unstable steps on both sides of the limits (k = 100 N/m, m = 1 kg)."""
+    k, m = 100.0, 1.0
+    for method, h, steps, expected in (("symplectic_euler", 0.19, 200, False), ("symplectic_euler", 0.21, 200, True),
+                                       ("rk4", 0.27, 200, False), ("rk4", 0.30, 200, True),
+                                       ("euler", 0.05, 2000, True), ("euler", 0.001, 200, False)):
+        got = _blows_up(student, method, k, m, h, steps)
+        if got != expected:
+            raise GradingFailure(f"blows_up({method!r}, k=100, m=1, h={h}, steps={steps}) (omega h = {10 * h:g}) "
+                                 f"returned {got}, expected {expected}: the amplitude "
+                                 f"{'grows past 1000 times its start' if expected else 'stays near 1 m'}")
+
+
+@pytest.mark.points(1)
+@pytest.mark.hidden
+def test_blows_up_random(student, rng):
+    """blows_up agrees with the library's blow-up test at random stiffnesses, masses and steps."""
+    for method in ("symplectic_euler", "verlet", "rk4"):
+        k, m = 10 ** rng.uniform(-1, 6), 10 ** rng.uniform(-2, 2)
+        omega = np.sqrt(k / m)
+        for factor in (rng.uniform(0.5, 0.9), rng.uniform(1.1, 1.5)):
+            h = factor * STABLE[method] / omega
+            expected = stability.blows_up(method, k, m, h, steps=200)
+            got = _blows_up(student, method, k, m, h, 200)
+            if got != expected:
+                raise GradingFailure(f"blows_up({method!r}, k={k:.4g}, m={m:.4g}, h={h:.4g}) (omega h = {omega * h:.3g}) "
+                                     f"returned {got}, expected {expected}")
+
+
+# -- max_stable_step ---------------------------------------------------------------------------
+
+
+@pytest.mark.points(2)
+def test_max_stable_step_one_spring(student):
+    """max_stable_step measures omega h_max = 2 (symplectic Euler) and 2.83 (RK4) for k = 100 N/m, m = 1 kg."""
+    for method in ("symplectic_euler", "rk4"):
+        call = f"max_stable_step({method!r}, k=100, m=1)"
+        _check_limit(student.call("max_stable_step", method, 100.0, 1.0, timeout=20),
+                     stability.theory_max_step(method, 100.0, 1.0), 10.0, call)
+
+
+@pytest.mark.points(1)
+def test_max_stable_step_euler_has_none(student):
+    """max_stable_step reports 0.0 (no stable step) for explicit Euler and midpoint on the undamped spring."""
+    for method in ("euler", "midpoint"):
+        call = f"max_stable_step({method!r}, k=100, m=1)"
+        h = _number(student.call("max_stable_step", method, 100.0, 1.0, timeout=20), call)
+        if h != 0.0:
+            raise GradingFailure(f"{call} returned {h:.4g} s (omega h = {10 * h:.3g}); {method} has no stable step on "
+                                 "the undamped spring (its amplitude grows at every step), so the limit must be 0.0: "
+                                 "check that 0.9 h survives a test 4 times longer")
+
+
+@pytest.mark.points(3)
+@pytest.mark.hidden
+def test_max_stable_step_random(student, rng):
+    """max_stable_step is within 5% of theory for random stiffnesses and masses, for three methods."""
+    for method in ("symplectic_euler", "verlet", "rk4"):
+        k, m = 10 ** rng.uniform(-1, 7), 10 ** rng.uniform(-3, 2)
+        call = f"max_stable_step({method!r}, k={k:.4g}, m={m:.4g})"
+        _check_limit(student.call("max_stable_step", method, k, m, timeout=20),
+                     stability.theory_max_step(method, k, m), np.sqrt(k / m), call)
+
+
+@pytest.mark.points(1)
+@pytest.mark.hidden
+def test_max_stable_step_is_measured(student, rng):
+    """With a 20-step blow-up test, max_stable_step finds the larger limit that such a short test measures."""
+    k, m = 10 ** rng.uniform(0, 5), 10 ** rng.uniform(-2, 1)
+    expected = stability.max_stable_step("rk4", k, m, steps=20, rtol=1e-3)
+    call = f"max_stable_step('rk4', k={k:.4g}, m={m:.4g}, steps=20)"
+    got = _number(student.call("max_stable_step", "rk4", k, m, 20, timeout=20), call)
+    omega = np.sqrt(k / m)
+    if not abs(got / expected - 1) <= 0.03:
+        raise GradingFailure(f"{call} returned omega h = {omega * got:.3g}; a 20-step test lets steps up to omega h = "
+                             f"{omega * expected:.3g} pass (within 3%): measure the limit with the `steps` you are given")
+
+
+# -- chain_max_stable_step ---------------------------------------------------------------------
+
+
+def _chain_reference(method, n, k, m):
+    """(omega h)_max / omega_max, with omega_max from the library's taut string pinned at both ends."""
+    h_symplectic = string(n + 2, pin="both", k=k, mass=m, gravity=0.0).max_stable_step()   # 2 / omega_max
+    return STABLE[method] / 2.0 * h_symplectic
+
+
+@pytest.mark.points(1)
+def test_chain_max_stable_step_four_masses(student):
+    """chain_max_stable_step measures 2 / omega_max for 4 masses of 1 kg between walls, springs 100 N/m."""
+    expected = _chain_reference("symplectic_euler", 4, 100.0, 1.0)
+    _check_limit(student.call("chain_max_stable_step", "symplectic_euler", 4, 100.0, 1.0, timeout=20), expected,
+                 2.0 / expected, "chain_max_stable_step('symplectic_euler', n=4, k=100, m=1)", what="2 / omega_max")
+
+
+@pytest.mark.points(2)
+@pytest.mark.hidden
+def test_chain_max_stable_step_random(student, rng):
+    """chain_max_stable_step is within 5% of (omega h)_max / omega_max for random chains, two methods."""
+    for method in ("symplectic_euler", "rk4"):
+        n, k, m = int(rng.integers(2, 20)), 10 ** rng.uniform(0, 5), 10 ** rng.uniform(-2, 1)
+        expected = _chain_reference(method, n, k, m)
+        omega_max = STABLE[method] / expected
+        _check_limit(student.call("chain_max_stable_step", method, n, k, m, timeout=20), expected, omega_max,
+                     f"chain_max_stable_step({method!r}, n={n}, k={k:.4g}, m={m:.4g})",
+                     what="(omega h)_max / omega_max")
+
+
+# -- implicit_euler_spring ---------------------------------------------------------------------
+
+
+def _state(x, v):
+    return np.stack([np.atleast_1d(x), np.atleast_1d(v)], axis=1)[:, :, None].astype(float)
+
+
+def _check_implicit(got, x, v, k, m, h, call):
+    if not isinstance(got, tuple) or len(got) != 2:
+        kind = describe_value(got) if not isinstance(got, tuple) else f"a tuple of {len(got)} values"
+        raise GradingFailure(f"{call} returned {kind}, expected the tuple (x_new, v_new)")
+    f, X = stability.oscillator(k, m), _state(x, v)
+    reference = implicit_euler(f, X, 0.0, h, tol=1e-13)
+    hints = {"an explicit Euler step": euler(f, X, 0.0, h), "a symplectic Euler step": symplectic_euler(f, X, 0.0, h)}
+    shape = np.shape(x)
+    for part, name in ((0, "x_new"), (1, "v_new")):
+        value = got[part]
+        if shape == () and isinstance(value, (float, int, np.floating, np.integer)) and not isinstance(value, bool):
+            value = np.array(float(value))
+        expect_array(value, reference[:, part, 0].reshape(shape), f"{name} of {call}", rtol=1e-8, atol=1e-12,
+                     hints={label: H[:, part, 0].reshape(shape) for label, H in hints.items()})
+
+
+@pytest.mark.points(1)
+def test_implicit_euler_spring_one_step(student):
+    """implicit_euler_spring takes one backward-Euler step from x = 1 m, v = 0 (k = 100 N/m, m = 1 kg, h = 0.05 s)."""
+    call = "implicit_euler_spring(x=1, v=0, k=100, m=1, h=0.05)"
+    _check_implicit(student.call("implicit_euler_spring", 1.0, 0.0, 100.0, 1.0, 0.05), 1.0, 0.0, 100.0, 1.0, 0.05, call)
+
+
+@pytest.mark.points(2)
+@pytest.mark.hidden
+def test_implicit_euler_spring_random(student, rng):
+    """implicit_euler_spring matches the library's implicit Euler on arrays of springs, up to omega h = 100, inputs unchanged."""
+    for _ in range(3):
+        p = int(rng.integers(2, 8))
+        x, v = rng.normal(size=p), rng.normal(size=p) * 5
+        k, m = 10 ** rng.uniform(0, 6), 10 ** rng.uniform(-2, 1)
+        h = 10 ** rng.uniform(-2, 2) / np.sqrt(k / m)
+        call = f"implicit_euler_spring(x, v of shape ({p},), k={k:.4g}, m={m:.4g}, h={h:.3g})"
+        got = student.call("implicit_euler_spring", x, v, k, m, h, check_inputs=True)
+        _check_implicit(got, x, v, k, m, h, call)
+
+
+# -- damping_factor ----------------------------------------------------------------------------
+
+
+def _check_damping(got, omega_h, call):
+    exact = 1.0 / np.sqrt(1.0 + omega_h**2)
+    expect_array(got, stability.damping_factor(omega_h), call, rtol=1e-6, atol=1e-12,
+                 hints={"1 / (1 + (omega h)^2), the factor of the energy, not of the amplitude": exact**2,
+                        "1: no damping at all (an explicit or symplectic step?)": np.ones_like(omega_h)})
+
+
+@pytest.mark.points(1)
+def test_damping_factor_public(student):
+    """damping_factor gives 1 / sqrt(1 + (omega h)^2) per step at omega h = 0.1, 1 and 10."""
+    omega_h = np.array([0.1, 1.0, 10.0])
+    _check_damping(student.call("damping_factor", omega_h, timeout=10), omega_h, "damping_factor([0.1, 1, 10])")
+
+
+@pytest.mark.points(1)
+@pytest.mark.hidden
+def test_damping_factor_random(student, rng):
+    """damping_factor matches the library's measurement at random omega h from 0.01 to 100, inputs unchanged."""
+    omega_h = np.sort(10 ** rng.uniform(-2, 2, size=int(rng.integers(5, 15))))
+    got = student.call("damping_factor", omega_h, timeout=10, check_inputs=True)
+    _check_damping(got, omega_h, f"damping_factor(omega_h of {len(omega_h)} random values from {omega_h[0]:.3g} to {omega_h[-1]:.3g})")
+
+
+# -- cost_table --------------------------------------------------------------------------------
+
+
+def _check_cost(got, ks, m, T, h_implicit, call):
+    names = ("symplectic_euler", "rk4", "implicit_euler")
+    if not isinstance(got, dict) or any(name not in got for name in names):
+        have = sorted(got) if isinstance(got, dict) else describe_value(got)
+        raise GradingFailure(f"{call} returned {have}, expected a dict with the keys {', '.join(names)}")
+    for name in names:
+        steps = np.asarray(got[name]) if isinstance(got[name], (np.ndarray, list, tuple)) else None
+        if steps is None or steps.shape != ks.shape or steps.dtype.kind not in "iuf":
+            raise GradingFailure(f"{call}[{name!r}] is {describe_value(got[name])}, expected {len(ks)} step counts")
+        if name == "implicit_euler":
+            expected = np.full(len(ks), np.ceil(T / h_implicit))
+        else:
+            expected = np.ceil(T / (0.9 * np.array([stability.theory_max_step(name, k, m) for k in ks])))
+        growth = np.polyfit(np.log(ks), np.log(np.maximum(steps.astype(float), 1e-300)), 1)[0]
+        trend = 0.0 if name == "implicit_euler" else 0.5
+        if not abs(growth - trend) <= 0.05:
+            raise GradingFailure(f"in {call}, the {name} step counts grow like k^{growth:.2f}, expected k^{trend:g} "
+                                 f"({'the same count at every stiffness' if trend == 0 else 'h_max falls like 1/sqrt(k)'})")
+        bad = np.abs(steps - expected) > 0.05 * expected + 1
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise GradingFailure(f"in {call}, {name} at k = {ks[i]:.3g} N/m takes {steps[i]:g} steps, expected about "
+                                 f"{expected[i]:.0f} (ceil(T / h) with h = "
+                                 f"{'h_implicit' if name == 'implicit_euler' else '0.9 h_max'})")
+
+
+@pytest.mark.points(1)
+def test_cost_table_public(student):
+    """cost_table counts the steps of one simulated second for k = 100 to 1e8 N/m, m = 1 kg, h_implicit = 0.01 s."""
+    ks = np.array([1e2, 1e4, 1e6, 1e8])
+    _check_cost(student.call("cost_table", ks, timeout=20), ks, 1.0, 1.0, 0.01,
+                "cost_table(ks=[1e2, 1e4, 1e6, 1e8], m=1, T=1, h_implicit=0.01)")
+
+
+@pytest.mark.points(2)
+@pytest.mark.hidden
+def test_cost_table_trend(student, rng):
+    """cost_table: explicit step counts grow like sqrt(k), implicit Euler's stay flat, for a random mass, T and h."""
+    ks = 10 ** (rng.uniform(5, 6) + np.array([0.0, 1.5, 3.0, 4.5]))
+    m, T, h_implicit = 10 ** rng.uniform(-1, 1), rng.uniform(0.5, 2.0), rng.choice([1 / 24, 1 / 30, 1 / 60, 0.01])
+    m = float(m)
+    call = f"cost_table(ks from {ks[0]:.3g} to {ks[-1]:.3g} N/m, m={m:.3g}, T={T:.3g}, h_implicit={h_implicit:.3g})"
+    got = student.call("cost_table", ks, m, T, float(h_implicit), timeout=20)
+    _check_cost(got, ks, m, T, float(h_implicit), call)

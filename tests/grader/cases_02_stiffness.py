@@ -1,0 +1,159 @@
+"""Wrong and alternative submissions of exercise 02_stiffness (format: see exercise_corpus.py)."""
+
+EXERCISE = "02_stiffness"
+
+ONE_SPRING = "test_max_stable_step_one_spring"
+RANDOM = "test_max_stable_step_random"
+EULER = "test_max_stable_step_euler_has_none"
+MEASURED = "test_max_stable_step_is_measured"
+CHAIN = ["test_chain_max_stable_step_four_masses", "test_chain_max_stable_step_random"]
+BLOWS_UP = ["test_blows_up_around_the_limits", "test_blows_up_random"]
+IMPLICIT = ["test_implicit_euler_spring_one_step", "test_implicit_euler_spring_random"]
+DAMPING = ["test_damping_factor_public", "test_damping_factor_random"]
+COST = ["test_cost_table_public", "test_cost_table_trend"]
+
+REJECTED = {
+    # The bisection stops at a bracket a factor 2 wide and returns its upper end, a step known to blow up.
+    "bisection_returns_upper_bound": {
+        "replace": {"bisect_stable": '''
+def bisect_stable(unstable, lo, hi, rtol=0.01):
+    while hi > 2 * lo:
+        mid = np.sqrt(lo * hi)
+        if unstable(mid):
+            hi = mid
+        else:
+            lo = mid
+    return hi
+'''},
+        "fails": {ONE_SPRING: "expected about 2 (theory, within 5%)", RANDOM: "within 5%",
+                  CHAIN[0]: "2 / omega_max"},
+        "passes": BLOWS_UP + IMPLICIT + DAMPING,
+    },
+    # No measurement at all: the theoretical limit, with omega = k/m instead of sqrt(k/m).
+    "theory_with_k_over_m": {
+        "replace": {"max_stable_step": '''
+def max_stable_step(method, k, m, steps=200, rtol=0.01):
+    limits = {"symplectic_euler": 2.0, "verlet": 2.0, "rk4": 2.0 * np.sqrt(2.0)}
+    return limits.get(method, 0.0) / (k / m)
+'''},
+        "fails": {ONE_SPRING: "m/k instead of sqrt(m/k)", RANDOM: "expected about",
+                  MEASURED: "measure the limit with the `steps` you are given",
+                  COST[0]: "step counts grow like k^1.00, expected k^0.5"},
+        "passes": [EULER] + CHAIN + BLOWS_UP + IMPLICIT + DAMPING,
+    },
+    # The theoretical limit, right this time, but not measured: a short test finds a larger limit.
+    "theory_not_measured": {
+        "replace": {"max_stable_step": '''
+def max_stable_step(method, k, m, steps=200, rtol=0.01):
+    limits = {"symplectic_euler": 2.0, "verlet": 2.0, "rk4": 2.0 * np.sqrt(2.0)}
+    return limits.get(method, 0.0) / np.sqrt(k / m)
+'''},
+        "fails": {MEASURED: "a 20-step test lets steps up to omega h = 2.97"},
+        "passes": [ONE_SPRING, RANDOM, EULER] + CHAIN + BLOWS_UP + IMPLICIT + DAMPING + COST,
+    },
+    # No confirmation with a longer test: explicit Euler gets the 'limit' of a 200-step test.
+    "euler_gets_a_limit": {
+        "replace": {"stable_limit": '''
+def stable_limit(unstable, omega, steps=200, rtol=0.01):
+    lo, hi = 0.01 / omega, 10.0 / omega
+    if not unstable(hi, steps):
+        return np.inf
+    if unstable(lo, steps):
+        return 0.0
+    return bisect_stable(lambda h: unstable(h, steps), lo, hi, rtol)
+'''},
+        "fails": {EULER: "euler has no stable step on the undamped spring"},
+        "passes": [ONE_SPRING, RANDOM, MEASURED] + CHAIN + BLOWS_UP + IMPLICIT + DAMPING + COST,
+    },
+    # The 'implicit' step uses the old position in the force: that is symplectic Euler.
+    "implicit_step_is_explicit": {
+        "replace": {"implicit_euler_spring": '''
+def implicit_euler_spring(x, v, k, m, h):
+    v_new = v - h * k / m * x
+    x_new = x + h * v_new
+    return x_new, v_new
+'''},
+        "fails": {IMPLICIT[0]: "your result matches a symplectic Euler step",
+                  IMPLICIT[1]: "your result matches a symplectic Euler step",
+                  DAMPING[0]: "damping_factor([0.1, 1, 10])"},
+        "passes": [ONE_SPRING, RANDOM, EULER, MEASURED] + CHAIN + BLOWS_UP + COST,
+    },
+    # The energy's factor per step, not the amplitude's.
+    "damping_squared": {
+        "replace": {"damping_factor": '''
+def damping_factor(omega_h, steps=50):
+    return 1.0 / (1.0 + np.asarray(omega_h, dtype=float) ** 2)
+'''},
+        "fails": {DAMPING[0]: "your result matches 1 / (1 + (omega h)^2), the factor of the energy",
+                  DAMPING[1]: "the factor of the energy, not of the amplitude"},
+        "passes": [ONE_SPRING, RANDOM, EULER, MEASURED] + CHAIN + BLOWS_UP + IMPLICIT + COST,
+    },
+    # Implicit Euler held to the explicit limit 'to be safe': its cost grows with k like the others.
+    "implicit_held_to_explicit_limit": {
+        "replace": {"cost_table": '''
+def cost_table(ks, m=1.0, T=1.0, h_implicit=0.01):
+    table = {}
+    for method in ("symplectic_euler", "rk4"):
+        table[method] = np.array([int(np.ceil(T / (0.9 * max_stable_step(method, k, m)))) for k in ks])
+    h = np.minimum(h_implicit, np.array([0.9 * max_stable_step("symplectic_euler", k, m) for k in ks]))
+    table["implicit_euler"] = np.ceil(T / h).astype(int)
+    return table
+'''},
+        "fails": {COST[0]: "implicit_euler step counts grow like k^0.30, expected k^0",
+                  COST[1]: "the same count at every stiffness"},
+        "passes": [ONE_SPRING, RANDOM, EULER, MEASURED] + CHAIN + BLOWS_UP + IMPLICIT + DAMPING,
+    },
+}
+
+CORRECT = {
+    # Energy instead of amplitude, a linear bisection with a fixed number of halvings, the implicit step
+    # by a linear solve, the damping factor in closed form, the cost table with plain Python loops.
+    "written_differently": {
+        "replace": {
+            "grows": '''
+def grows(step, f, X0, omega, h, steps=200, growth=1e3):
+    def energy(X):
+        return float(np.sum(X[:, 1] ** 2) + omega**2 * np.sum(X[:, 0] ** 2))
+    limit = growth**2 * energy(X0)
+    X, t = X0.copy(), 0.0
+    with np.errstate(all="ignore"):
+        for _ in range(steps):
+            X, t = step(f, X, t, h), t + h
+            E = energy(X)
+            if np.isnan(E) or E > limit:
+                return True
+    return False
+''',
+            "bisect_stable": '''
+def bisect_stable(unstable, lo, hi, rtol=0.01):
+    for _ in range(60):
+        if hi - lo <= rtol * lo:
+            break
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if unstable(mid) else (mid, hi)
+    return lo
+''',
+            "implicit_euler_spring": '''
+def implicit_euler_spring(x, v, k, m, h):
+    A = np.array([[1.0, -h], [h * k / m, 1.0]])
+    solution = np.linalg.solve(A, np.stack([np.asarray(x, dtype=float), np.asarray(v, dtype=float)]))
+    return solution[0], solution[1]
+''',
+            "damping_factor": '''
+def damping_factor(omega_h, steps=50):
+    return 1.0 / np.sqrt(1.0 + np.square(np.asarray(omega_h, dtype=float)))
+''',
+            "cost_table": '''
+import math
+
+def cost_table(ks, m=1.0, T=1.0, h_implicit=0.01):
+    out = {"symplectic_euler": [], "rk4": [], "implicit_euler": []}
+    for k in ks:
+        for method in ("symplectic_euler", "rk4"):
+            out[method].append(math.ceil(T / (0.9 * max_stable_step(method, float(k), m))))
+        out["implicit_euler"].append(math.ceil(T / h_implicit))
+    return {name: np.array(counts) for name, counts in out.items()}
+''',
+        },
+    },
+}
