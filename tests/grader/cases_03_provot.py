@@ -1,0 +1,279 @@
+"""Wrong and alternative submissions of exercise 03_provot (see ``exercise_corpus.py``)."""
+
+EXERCISE = "03_provot"
+
+# -- pieces of wrong submissions ---------------------------------------------------------------
+
+_PASS_HEAD = '''
+def provot_pass(x, indices, L0, free, max_strain=0.1):
+    x = np.asarray(x, dtype=float)
+    i, j = np.asarray(indices).T
+    free = np.asarray(free, dtype=bool)
+    f_i, f_j = free[i].astype(float), free[j].astype(float)
+    total = f_i + f_j
+'''
+
+_SHARES = '''
+    w_i = np.divide(f_i, total, out=np.zeros_like(f_i), where=total > 0)
+    w_j = np.divide(f_j, total, out=np.zeros_like(f_j), where=total > 0)
+'''
+
+_EXCESS = '''
+    d = x[j] - x[i]
+    L = np.linalg.norm(d, axis=1)
+    limit = (1.0 + max_strain) * np.asarray(L0, dtype=float)
+    too_long = (L > limit) & (total > 0)
+    e = np.where(too_long, L - limit, 0.0)
+    u = d / np.where(L > 0, L, 1.0)[:, None]
+'''
+
+_SCATTER = '''
+    dx = np.zeros_like(x)
+    np.add.at(dx, i, (w_i * e)[:, None] * u)
+    np.add.at(dx, j, -(w_j * e)[:, None] * u)
+    n_p = np.bincount(i[too_long], minlength=len(x)) + np.bincount(j[too_long], minlength=len(x))
+    return x + free[:, None] * dx / np.maximum(n_p, 1)[:, None]
+'''
+
+
+def _pass(shares=_SHARES, excess=_EXCESS, scatter=_SCATTER):
+    return _PASS_HEAD + shares + excess + scatter
+
+
+PASS_TESTS = ["test_provot_pass_one_spring[both free]", "test_provot_pass_one_spring[first pinned]",
+              "test_provot_pass_one_spring[second pinned]", "test_provot_pass_one_spring[both pinned]",
+              "test_provot_pass_shared_particle", "test_provot_pass_random_cloths"]
+OTHER_TESTS = ["test_spring_strain_three_springs", "test_spring_strain_random_cloth",
+               "test_max_strain_history_frames", "test_max_strain_history_recorded_run"]
+
+REJECTED = {
+    "pinned_particles_move": {
+        # the pins are ignored: every spring's excess is split half and half
+        "replace": {"provot_pass": '''
+def provot_pass(x, indices, L0, free, max_strain=0.1):
+    x = np.asarray(x, dtype=float)
+    i, j = np.asarray(indices).T
+    d = x[j] - x[i]
+    L = np.linalg.norm(d, axis=1)
+    limit = (1.0 + max_strain) * np.asarray(L0, dtype=float)
+    e = np.where(L > limit, L - limit, 0.0)
+    u = d / np.where(L > 0, L, 1.0)[:, None]
+    dx = np.zeros_like(x)
+    np.add.at(dx, i, 0.5 * e[:, None] * u)
+    np.add.at(dx, j, -0.5 * e[:, None] * u)
+    n_p = np.bincount(i[e > 0], minlength=len(x)) + np.bincount(j[e > 0], minlength=len(x))
+    return x + dx / np.maximum(n_p, 1)[:, None]
+'''},
+        "fails": {
+            "test_provot_pass_one_spring[first pinned]": "moved pinned particle 0",
+            "test_provot_pass_one_spring[both pinned]": "moved pinned particle 0",
+            "test_provot_pass_random_cloths": "moved pinned particle",
+            "test_provot_project_properties": "moved pinned particle",
+        },
+        "passes": ["test_provot_pass_one_spring[both free]"] + OTHER_TESTS,
+    },
+    "one_end_only": {
+        # both ends free, only the second end moves (by the whole excess)
+        "replace": {"provot_pass": _pass(shares="\n    w_j = f_j\n    w_i = f_i * (1.0 - f_j)\n")},
+        "fails": {
+            "test_provot_pass_one_spring[both free]": "moved the midpoint",
+            "test_provot_pass_random_cloths": "is off by",
+            "test_provot_project_agrees_with_reference": "is off by",
+        },
+        "passes": ["test_provot_pass_one_spring[first pinned]", "test_provot_pass_one_spring[second pinned]",
+                   "test_provot_pass_one_spring[both pinned]"] + OTHER_TESTS,
+    },
+    "repeated_indices_lose_corrections": {
+        # dx[i] += c keeps one correction per repeated index
+        "replace": {"provot_pass": _pass(scatter='''
+    dx = np.zeros_like(x)
+    dx[i] += (w_i * e)[:, None] * u
+    dx[j] -= (w_j * e)[:, None] * u
+    n_p = np.bincount(i[too_long], minlength=len(x)) + np.bincount(j[too_long], minlength=len(x))
+    return x + free[:, None] * dx / np.maximum(n_p, 1)[:, None]
+''')},
+        "fails": {
+            "test_provot_pass_shared_particle": "a lost correction",
+            "test_provot_pass_random_cloths": "is off by",
+            "test_provot_project_agrees_with_reference": "is off by",
+        },
+        "passes": PASS_TESTS[:4] + OTHER_TESTS,
+    },
+    "shortened_to_rest_length": {
+        # the excess measured from L0 instead of (1 + s) L0
+        "replace": {"provot_pass": _pass(excess=_EXCESS.replace("e = np.where(too_long, L - limit, 0.0)",
+                                                                "e = np.where(too_long, L - np.asarray(L0), 0.0)"))},
+        "fails": {
+            "test_provot_pass_one_spring[both free]": "shortened the spring to its rest length",
+            "test_provot_pass_one_spring[first pinned]": "shortened the spring to its rest length",
+            "test_provot_pass_random_cloths": "is off by",
+            "test_provot_project_agrees_with_reference": "is off by",
+            "test_constrain_state_one_spring": "is off by",
+        },
+        "passes": ["test_provot_pass_one_spring[both pinned]"] + OTHER_TESTS,
+    },
+    "corrections_summed_not_averaged": {
+        "replace": {"provot_pass": _pass(scatter='''
+    dx = np.zeros_like(x)
+    np.add.at(dx, i, (w_i * e)[:, None] * u)
+    np.add.at(dx, j, -(w_j * e)[:, None] * u)
+    return x + free[:, None] * dx
+''')},
+        "fails": {
+            "test_provot_pass_shared_particle": "the sum of the three corrections",
+            "test_provot_pass_random_cloths": "is off by",
+        },
+        "passes": PASS_TESTS[:4] + OTHER_TESTS,
+    },
+    "velocities_not_updated": {
+        "replace": {"constrain_state": '''
+def constrain_state(X, h, indices, L0, free, max_strain=0.1, iterations=500, tol=0.005):
+    X = np.asarray(X, dtype=float)
+    x_new, passes = provot_project(X[:, 0], indices, L0, free, max_strain, iterations, tol)
+    X_new = X.copy()
+    X_new[:, 0] = x_new
+    return X_new, passes
+'''},
+        "fails": {
+            "test_constrain_state_one_spring": "the velocities left unchanged",
+            "test_constrain_state_random_cloths": "the velocities left unchanged",
+        },
+        "passes": PASS_TESTS + OTHER_TESTS + ["test_provot_project_chain", "test_provot_project_nothing_to_do",
+                                              "test_provot_project_agrees_with_reference",
+                                              "test_provot_project_properties"],
+    },
+    "no_early_stop": {
+        "replace": {"provot_project": '''
+def provot_project(x, indices, L0, free, max_strain=0.1, iterations=500, tol=0.005):
+    x = np.array(x, dtype=float)
+    for _ in range(iterations):
+        x = provot_pass(x, indices, L0, free, max_strain)
+    return x, iterations
+'''},
+        "fails": {
+            "test_provot_project_chain": "is off by",
+            "test_provot_project_nothing_to_do": "0 passes",
+            "test_provot_project_agrees_with_reference": "is off by",
+            "test_provot_project_properties": "the cap",
+        },
+        "passes": PASS_TESTS + OTHER_TESTS,
+    },
+    "pinned_springs_block_the_stop": {
+        # the stopping test also looks at springs whose two ends are pinned, which never get shorter
+        "replace": {"provot_project": '''
+def provot_project(x, indices, L0, free, max_strain=0.1, iterations=500, tol=0.005):
+    x = np.array(x, dtype=float)
+    passes = 0
+    while passes < iterations and spring_strain(x, indices, L0).max() > max_strain + tol:
+        x = provot_pass(x, indices, L0, free, max_strain)
+        passes += 1
+    return x, passes
+'''},
+        "fails": {"test_provot_project_properties": "the cap"},
+        "passes": PASS_TESTS + OTHER_TESTS + ["test_provot_project_chain", "test_provot_project_nothing_to_do"],
+    },
+    "compression_counted_as_strain": {
+        "replace": {"max_strain_history": '''
+def max_strain_history(X, indices, L0):
+    return np.array([np.abs(spring_strain(Xk[:, 0], indices, L0)).max() for Xk in np.asarray(X)])
+'''},
+        "fails": {
+            "test_max_strain_history_frames": "the largest |strain|",
+            "test_max_strain_history_recorded_run": "is off by",
+        },
+        "passes": PASS_TESTS + ["test_spring_strain_three_springs", "test_spring_strain_random_cloth",
+                                "test_provot_project_agrees_with_reference", "test_constrain_state_random_cloths"],
+    },
+}
+
+CORRECT = {
+    "bincount_per_coordinate": {
+        # the same mathematics written differently: einsum lengths, bincount scatters, frames at once
+        "replace": {
+            "spring_strain": '''
+def spring_strain(x, indices, L0):
+    ij = np.asarray(indices)
+    d = np.asarray(x, dtype=float)[ij[:, 0]] - np.asarray(x, dtype=float)[ij[:, 1]]
+    return np.sqrt(np.einsum("sa,sa->s", d, d)) / L0 - 1
+''',
+            "max_strain_history": '''
+def max_strain_history(X, indices, L0):
+    ij = np.asarray(indices)
+    x = np.asarray(X, dtype=float)[:, :, 0]
+    L = np.linalg.norm(x[:, ij[:, 1]] - x[:, ij[:, 0]], axis=-1)
+    if L.shape[1] == 0:
+        return np.zeros(len(x))
+    return np.clip((L / L0 - 1).max(axis=1), 0, None)
+''',
+            "provot_pass": '''
+def provot_pass(x, indices, L0, free, max_strain=0.1):
+    x = np.array(x, dtype=float)
+    n, dim = x.shape
+    ij = np.asarray(indices)
+    a, b = ij[:, 0], ij[:, 1]
+    movable = np.asarray(free, dtype=bool)
+    ma, mb = movable[a], movable[b]
+    diff = x[a] - x[b]                                   # from b to a
+    L = np.sqrt((diff ** 2).sum(axis=1))
+    target = (1 + max_strain) * np.asarray(L0, dtype=float)
+    active = (L > target) & (ma | mb)
+    share_a = np.where(ma & mb, 0.5, np.where(ma, 1.0, 0.0))
+    share_b = np.where(ma & mb, 0.5, np.where(mb, 1.0, 0.0))
+    k = np.where(active, (L - target) / np.where(L > 0, L, 1), 0.0)
+    count = np.bincount(np.concatenate([a[active], b[active]]), minlength=n)
+    for c in range(dim):                                 # one coordinate at a time
+        move = np.bincount(b, share_b * k * diff[:, c], minlength=n) - np.bincount(a, share_a * k * diff[:, c], minlength=n)
+        x[:, c] = np.where(movable & (count > 0), x[:, c] + move / np.maximum(count, 1), x[:, c])
+    return x
+''',
+            "provot_project": '''
+def provot_project(x, indices, L0, free, max_strain=0.1, iterations=500, tol=0.005):
+    x = np.array(x, dtype=float)
+    ij = np.asarray(indices)
+    free = np.asarray(free, dtype=bool)
+    watched = free[ij[:, 0]] | free[ij[:, 1]]
+    for k in range(iterations + 1):
+        strain = spring_strain(x, ij, L0)[watched]
+        if k == iterations or strain.size == 0 or strain.max() <= max_strain + tol:
+            return x, k
+        x = provot_pass(x, ij, L0, free, max_strain)
+''',
+            "constrain_state": '''
+def constrain_state(X, h, indices, L0, free, max_strain=0.1, iterations=500, tol=0.005):
+    x, v = np.asarray(X, dtype=float)[:, 0], np.asarray(X, dtype=float)[:, 1]
+    x_new, n_passes = provot_project(x, indices, L0, free, max_strain=max_strain, iterations=iterations, tol=tol)
+    return np.stack([x_new, v + (x_new - x) / h], axis=1), n_passes
+''',
+        },
+    },
+    "python_loop_over_springs": {
+        # slow but right: a Jacobi pass with a Python loop over the springs (small cloths fit the time limit)
+        "replace": {"provot_pass": '''
+def provot_pass(x, indices, L0, free, max_strain=0.1):
+    x = np.asarray(x, dtype=float)
+    rows = x.tolist()
+    dx = [[0.0] * x.shape[1] for _ in rows]
+    count = [0] * len(rows)
+    for (i, j), rest in zip(np.asarray(indices).tolist(), np.asarray(L0, dtype=float).tolist()):
+        fi, fj = bool(free[i]), bool(free[j])
+        if not (fi or fj):
+            continue
+        d = [b - a for a, b in zip(rows[i], rows[j])]
+        L = sum(c * c for c in d) ** 0.5
+        e = L - (1 + max_strain) * rest
+        if e <= 0:
+            continue
+        wi, wj = fi / (fi + fj), fj / (fi + fj)
+        for a in range(len(d)):
+            dx[i][a] += wi * e * d[a] / L
+            dx[j][a] -= wj * e * d[a] / L
+        count[i] += 1
+        count[j] += 1
+    out = x.copy()
+    for p in range(len(rows)):
+        if free[p] and count[p]:
+            out[p] += np.array(dx[p]) / count[p]
+    return out
+'''},
+    },
+}
