@@ -145,9 +145,11 @@ def _diagnosis(student, method):
     f = remote("forced_oscillator", omega=1.7, amplitude=1.3, frequency=2.9)
     X = np.array([[[0.8, -0.3], [0.4, 1.1]], [[-1.2, 0.5], [0.2, -0.7]]])
     try:
-        got = student.call(name, f, X, 0.35, 0.05)
+        got = student.call(name, f, X, 0.35, 0.05, check_inputs=True)
         expect_array(got, reference(f, X, 0.35, 0.05), name)
-    except GradingFailure:
+    except GradingFailure as failure:
+        if "in place" in str(failure):
+            return f"; your {name} modifies X in place, which can overwrite X0 between the runs of the study"
         return f"; one step of your {name} does not match the reference, see the tests of {name}"
     return (f"; your {name} matches the reference on a single step, so look at convergence_errors "
             "(the loop and the error) and observed_order (the slope)")

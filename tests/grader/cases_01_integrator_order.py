@@ -1,0 +1,202 @@
+"""Wrong and alternative submissions of exercise 01_integrator_order (format: ``exercise_corpus.py``).
+
+The wrong ones are the slips students make with these methods: a midpoint step
+at the wrong time (invisible on the time-independent circle field, caught by
+the driven oscillator), trapezoid weights that are off, an RK4 with a wrong
+coefficient, an Euler step that overwrites the caller's state, an order fit
+from two points or with mixed logarithms, the Euclidean norm for the error,
+and the library's own stepper. The correct variant is written differently from
+the master throughout.
+"""
+
+EXERCISE = "01_integrator_order"
+
+REJECTED = {
+    "midpoint_at_wrong_time": {
+        "replace": {"midpoint_step": '''
+def midpoint_step(f, X, t, h):
+    X_m = X + 0.5 * h * f(X, t)
+    return X + h * f(X_m, t)
+'''},
+        "fails": {
+            "test_step_driven_particles[midpoint]": "your result matches a midpoint step that evaluates f at t instead of t + h/2",
+            "test_step_random[midpoint]": "your result matches a midpoint step that evaluates f at t instead of t + h/2",
+            "test_measured_order_random[midpoint]": "expected 2; one step of your midpoint_step does not match",
+        },
+        "passes": ["test_step_circle[midpoint]", "test_measured_order_circle[midpoint]",
+                   "test_step_driven_particles[trapezoid]", "test_convergence_errors_circle"],
+    },
+    "trapezoid_without_one_half": {
+        "replace": {"trapezoid_step": '''
+def trapezoid_step(f, X, t, h):
+    f_0 = f(X, t)
+    f_1 = f(X + h * f_0, t + h)
+    return X + h * (f_0 + f_1)
+'''},
+        "fails": {
+            "test_step_circle[trapezoid]": "your result matches a trapezoid step without the factor 1/2",
+            "test_step_random[trapezoid]": "without the factor 1/2",
+            "test_measured_order_circle[trapezoid]": "your trapezoid step (measured_order('trapezoid'",
+        },
+        "passes": ["test_step_circle[midpoint]", "test_measured_order_circle[midpoint]"],
+    },
+    "trapezoid_uneven_weights": {
+        "replace": {"trapezoid_step": '''
+def trapezoid_step(f, X, t, h):
+    f_0 = f(X, t)
+    f_1 = f(X + h * f_0, t + h)
+    return X + h * (f_0 + 2 * f_1) / 3
+'''},
+        "fails": {
+            "test_step_circle[trapezoid]": "trapezoid_step(f, X of shape (2,), t=0, h=0.1) on the circle field is off by",
+            "test_measured_order_circle[trapezoid]": "converges with order 1.",
+            "test_measured_order_random[trapezoid]": "expected 2; one step of your trapezoid_step does not match",
+        },
+        "passes": ["test_step_circle[euler]", "test_measured_order_circle[euler]", "test_observed_order_noisy"],
+    },
+    "rk4_equal_weights": {
+        "replace": {"rk4_step": '''
+def rk4_step(f, X, t, h):
+    k1 = f(X, t)
+    k2 = f(X + 0.5 * h * k1, t + 0.5 * h)
+    k3 = f(X + 0.5 * h * k2, t + 0.5 * h)
+    k4 = f(X + h * k3, t + h)
+    return X + h / 4 * (k1 + k2 + k3 + k4)
+'''},
+        "fails": {
+            "test_step_circle[rk4]": "your result matches an RK4 step with the weights (1, 1, 1, 1)/4",
+            "test_measured_order_circle[rk4]": "expected 4",
+        },
+        "passes": ["test_step_circle[midpoint]", "test_measured_order_circle[trapezoid]"],
+    },
+    "euler_overwrites_X": {
+        "replace": {"euler_step": '''
+def euler_step(f, X, t, h):
+    X += h * f(X, t)
+    return X
+'''},
+        "fails": {
+            "test_step_driven_particles[euler]": "`euler_step` modified its input `X` in place",
+            "test_step_random[euler]": "modified its input `X` in place",
+            "test_measured_order_circle[euler]": "expected 1; your euler_step modifies X in place",
+        },
+        "passes": ["test_step_circle[euler]", "test_observed_order_noisy"],
+    },
+    "order_from_first_two_errors": {
+        "replace": {"observed_order": '''
+def observed_order(h, errors):
+    return float(np.log(errors[0] / errors[1]) / np.log(h[0] / h[1]))
+'''},
+        "fails": {
+            "test_observed_order_noisy": "your result matches the slope between the first two points only",
+            "test_observed_order_random": "your result matches the slope between the first two points only",
+        },
+        "passes": ["test_observed_order_exact_powers", "test_step_circle[euler]"],
+    },
+    "order_with_mixed_logarithms": {
+        "replace": {"observed_order": '''
+def observed_order(h, errors):
+    return float(np.polyfit(np.log(h), np.log10(errors), 1)[0])
+'''},
+        "fails": {
+            "test_observed_order_exact_powers": "your result matches the least-squares slope with log10 on one axis and ln on the other",
+            "test_observed_order_random": "log10 on one axis and ln on the other",
+            "test_measured_order_circle[midpoint]": "converges with order 0.87, expected 2; your midpoint_step matches the reference",
+        },
+        "passes": ["test_convergence_errors_circle", "test_step_circle[midpoint]"],
+    },
+    "euclidean_error": {
+        "replace": {"convergence_errors": '''
+def convergence_errors(method, f, X0, t0, t1, exact, n_steps):
+    step = STEPPERS[method] if isinstance(method, str) else method
+    h = (t1 - t0) / np.asarray(n_steps, dtype=float)
+    errors = []
+    for N, h_N in zip(n_steps, h):
+        X = X0
+        for k in range(N):
+            X = step(f, X, t0 + k * h_N, h_N)
+        errors.append(np.linalg.norm(X - exact(t1)))
+    return h, np.array(errors)
+'''},
+        "fails": {
+            "test_convergence_errors_circle": "your result matches the Euclidean norm of X_N - X(t1)",
+        },
+        "passes": ["test_measured_order_circle[euler]", "test_observed_order_noisy"],
+    },
+    "midpoint_from_the_library": {
+        "replace": {"midpoint_step": '''
+from particles.integrators import midpoint
+
+def midpoint_step(f, X, t, h):
+    return midpoint(f, X, t, h)
+'''},
+        "fails": {
+            "test_step_circle[midpoint]": "uses `particles.integrators.midpoint`, which this exercise forbids",
+            "test_measured_order_circle[euler]": "(through measured_order -> convergence_errors -> STEPPERS -> midpoint_step)",
+        },
+        "passes": ["test_step_circle[euler]", "test_observed_order_noisy"],
+    },
+}
+
+CORRECT = {
+    "tableau_and_polyfit": {
+        "replace": {
+            "euler_step": '''
+def euler_step(f, X, t, h):
+    dX = np.asarray(f(X, t), dtype=float)
+    return np.add(X, h * dX)
+''',
+            "midpoint_step": '''
+def midpoint_step(f, X, t, h):
+    half = h / 2
+    slope = f(X + half * f(X, t), t + half)
+    return X + h * slope
+''',
+            "trapezoid_step": '''
+def trapezoid_step(f, X, t, h):
+    predictor = euler_step(f, X, t, h)
+    return 0.5 * (predictor + X + h * f(predictor, t + h))
+''',
+            "rk4_step": '''
+RK4_A = [[], [0.5], [0.0, 0.5], [0.0, 0.0, 1.0]]
+RK4_B = [1 / 6, 1 / 3, 1 / 3, 1 / 6]
+RK4_C = [0.0, 0.5, 0.5, 1.0]
+
+
+def rk4_step(f, X, t, h):
+    k = []
+    for a, c in zip(RK4_A, RK4_C):
+        stage = X.copy()
+        for a_j, k_j in zip(a, k):
+            stage = stage + h * a_j * k_j
+        k.append(f(stage, t + c * h))
+    return X + h * sum(b * k_i for b, k_i in zip(RK4_B, k))
+''',
+            "convergence_errors": '''
+def convergence_errors(method, f, X0, t0, t1, exact, n_steps):
+    step = {"euler": euler_step, "midpoint": midpoint_step, "trapezoid": trapezoid_step,
+            "rk4": rk4_step}.get(method, method)
+    target = exact(t1)
+    hs, errors = [], []
+    for N in n_steps:
+        h = (t1 - t0) / N
+        X, t = np.array(X0, dtype=float), t0
+        for _ in range(N):
+            X = step(f, X, t, h)
+            t += h
+        hs.append(h)
+        errors.append(np.abs(X - target).max())
+    return np.array(hs), np.array(errors)
+''',
+            "observed_order": '''
+def observed_order(h, errors):
+    slope, intercept = np.polyfit(np.log10(h), np.log10(errors), 1)
+    return slope
+''',
+            "measured_order": '''
+def measured_order(method, f, X0, t0, t1, exact, n_steps):
+    return observed_order(*convergence_errors(method, f, X0, t0, t1, exact, n_steps))
+''',
+        },
+    },
+}
