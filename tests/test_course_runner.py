@@ -1,6 +1,8 @@
 """The worker seen from the grader: limits, refusals, restarts, and a new exercise end to end."""
 
 import json
+import subprocess
+import sys
 import textwrap
 
 import nbformat
@@ -125,3 +127,30 @@ def test_a_new_exercise_end_to_end(tmp_path):
     assert "uses `numpy.linalg.norm`" in tests["lib"]["test_norm"]["reason"]
     assert "not implemented yet" in tests["stub"]["test_norm"]["reason"]
     assert np.isclose(tests["good"]["test_norm_random"]["seed"], 5)
+
+
+def test_a_forbidden_class_keeps_its_library_subclasses_working():
+    """Forbidding ParticleSystem still lets the library import and use MassSpringSystem (its subclass),
+    while calling ParticleSystem itself raises PermissionError naming the reason."""
+    script = textwrap.dedent('''
+        import sys
+        from particles.course import sandbox
+        wires = sandbox.Tripwires({"particles.system.ParticleSystem": "write the loop yourself"})
+        sys.meta_path.insert(0, wires)
+        wires.wire()  # as the worker does
+        from particles.massspring import MassSpringSystem, string
+        s = string(5)
+        assert isinstance(s, MassSpringSystem) and s.run(0.01, 0.005)[1].shape[0] == 3
+        import particles.system
+        assert isinstance(s, particles.system.ParticleSystem)
+        try:
+            particles.system.ParticleSystem([[0.0, 0.0]])
+        except PermissionError as error:
+            print("refused:", error)
+        else:
+            print("ParticleSystem was not refused")
+    ''')
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert "refused: particles.system.ParticleSystem is not allowed in this exercise: write the loop yourself" \
+        in result.stdout

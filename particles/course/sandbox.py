@@ -114,10 +114,30 @@ class Policy:
 
 
 class _Tripwire:
-    """Stands in for a forbidden library object: any use raises PermissionError."""
+    """Stands in for a forbidden library object: any use raises PermissionError.
 
-    def __init__(self, name, reason):
+    A forbidden *class* may still be a base class or the second argument of
+    ``isinstance`` (``__mro_entries__``, ``__instancecheck__``): the library
+    subclasses its own classes (``MassSpringSystem(ParticleSystem)``) and must
+    keep importing when one of them is forbidden. A submission that subclasses
+    a forbidden class names it in its code, which the syntax-tree check of
+    :mod:`particles.course.forbidden` reports.
+    """
+
+    def __init__(self, name, reason, original=None):
         self._name, self._reason = name, reason
+        self._original = original if isinstance(original, type) else None
+
+    def __mro_entries__(self, bases):
+        if self._original is None:
+            self._fail()
+        return (self._original,)
+
+    def __instancecheck__(self, instance):
+        return self._original is not None and isinstance(instance, self._original)
+
+    def __subclasscheck__(self, cls):
+        return self._original is not None and issubclass(cls, self._original)
 
     def _fail(self, *args, **kwargs):
         raise PermissionError(f"{self._name} is not allowed in this exercise: {self._reason}")
@@ -156,7 +176,7 @@ class Tripwires:
             module = sys.modules.get(module_name)
             value = vars(module).get(attr) if module is not None else None
             if value is not None and not isinstance(value, _Tripwire) and id(value) not in self.targets:
-                self.targets[id(value)] = (value, _Tripwire(name, reason))
+                self.targets[id(value)] = (value, _Tripwire(name, reason, value))
         if not self.targets:
             return
         for module in library:  # a loop over modules and their attributes, not over particles
