@@ -84,3 +84,10 @@ def test_correct_variant_scores_full_marks(graded, exercise, case):
     """Correct code written differently from the master scores full marks."""
     tests = _tests(graded, exercise, case)
     assert all(t["passed"] for t in tests.values()), {k: t["reason"] for k, t in tests.items() if not t["passed"]}
+
+
+@pytest.mark.parametrize("exercise", EXERCISES)
+def test_every_test_has_its_own_name(graded, exercise):
+    """The names students see (feedback, Gradescope) are distinct, parametrized tests saying their case."""
+    names = [t["name"] for t in _tests(graded, exercise, "master").values()]
+    assert len(set(names)) == len(names), sorted(n for n in names if names.count(n) > 1)
