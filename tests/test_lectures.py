@@ -1,0 +1,82 @@
+"""Every lecture's committed notebook: clean, titled, closing with questions and its exercises.
+
+These checks read the files only; ``tests/test_notebooks.py`` executes every
+lecture in a fresh kernel (and checks its animation player), and the
+``test_lecture_NN.py`` files check what one lecture must cover.
+"""
+
+import re
+from pathlib import Path
+
+import nbformat
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+LECTURES = sorted((ROOT / "lectures").glob("[0-9][0-9]_*.ipynb"))
+
+# the exercises each lecture's closing cell must link (the matching exercise, or the nearest one)
+EXERCISES = {
+    "01": ["01_integrator_order"],
+    "02": ["02_stiffness"],
+    "03": ["01_integrator_order"],
+    "04": ["00_warmup"],
+    "05": ["00_warmup"],
+    "06": ["03_provot"],
+    "07": ["02_stiffness", "03_provot", "04_discretization"],
+}
+MAX_CODE_LINES = 20
+
+
+@pytest.fixture(params=LECTURES, ids=[p.name for p in LECTURES])
+def lecture(request):
+    return request.param, nbformat.read(request.param, as_version=4)
+
+
+def test_the_series_is_complete():
+    """Lectures 01 to 07 exist, one per number, each with its expected exercise links listed."""
+    assert [p.name[:2] for p in LECTURES] == sorted(EXERCISES)
+
+
+def test_valid_and_committed_clean(lecture):
+    """nbformat 4 for the python3 kernel; no outputs, no execution counts; unique cell ids."""
+    path, nb = lecture
+    nbformat.validate(nb)
+    assert nb.nbformat == 4 and nb.metadata["kernelspec"]["name"] == "python3"
+    code = [cell for cell in nb.cells if cell.cell_type == "code"]
+    assert code, "a lecture computes what it claims"
+    dirty = [k for k, cell in enumerate(nb.cells) if cell.cell_type == "code"
+             and (cell.outputs or cell.execution_count is not None)]
+    assert dirty == [], f"{path.name}: cells with outputs {dirty}"
+    ids = [cell.get("id") for cell in nb.cells]
+    assert all(ids) and len(set(ids)) == len(ids)
+
+
+def test_opens_with_its_title_and_goals(lecture):
+    """The first cell is '# Lecture N · Topic' and says what the reader will be able to do (a list)."""
+    path, nb = lecture
+    first = nb.cells[0]
+    assert first.cell_type == "markdown"
+    assert re.match(rf"# Lecture {int(path.name[:2])} · \S", first.source), first.source.splitlines()[0]
+    head, _, goals = first.source.partition("you will be able to")
+    assert goals, "the first cell says what the reader will be able to do"
+    assert len(re.findall(r"^\s*(?:\d+\.|[*-]) ", goals, flags=re.M)) >= 3
+
+
+def test_closes_with_questions_and_links_its_exercises(lecture):
+    """The last cell is markdown with questions to think about and relative links to existing exercises."""
+    path, nb = lecture
+    last = nb.cells[-1]
+    assert last.cell_type == "markdown" and "Questions to think about" in last.source
+    links = re.findall(r"\]\((\.\./exercises/[^)]+\.ipynb)\)", last.source)
+    for name in EXERCISES[path.name[:2]]:
+        assert f"../exercises/{name}.ipynb" in links, f"{path.name} does not link {name}"
+    for link in links:
+        assert (path.parent / link).resolve().is_file(), f"{path.name}: {link} does not exist"
+
+
+def test_code_cells_are_short(lecture):
+    """Code cells stay short enough to read beside their prose."""
+    path, nb = lecture
+    long = [(k, len(cell.source.splitlines())) for k, cell in enumerate(nb.cells)
+            if cell.cell_type == "code" and len(cell.source.splitlines()) > MAX_CODE_LINES]
+    assert long == [], f"{path.name}: (cell, lines) {long}"
