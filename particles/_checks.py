@@ -81,3 +81,10 @@ def method_name(method, table, name="method"):
         valid = ", ".join(repr(k) for k in table)
         raise ValueError(f"unknown {name} {method!r}; expected one of {valid}")
     return table[method]
+
+
+def count(value, name, least=0):
+    """An integer >= `least` (a count of iterations, steps, particles); floats and bools are refused."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < least:
+        raise ValueError(f"{name} must be an integer >= {least}, got {value!r}")
+    return int(value)

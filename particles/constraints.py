@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._checks import as_float_array, nonnegative_number, positive_number
+from ._checks import as_float_array, count, nonnegative_number
 from .forces import pair_differences
 from .springs import _indices, _unit
 
@@ -148,6 +148,7 @@ def provot_projection(x, indices, rest_length, free, max_strain=0.1, iterations=
         raise ValueError(f"free must be a boolean array of shape ({len(x)},), got {free.shape}")
     limit = 1.0 + nonnegative_number(max_strain, "max_strain")
     tol = nonnegative_number(tol, "tol")
+    iterations = count(iterations, "iterations")
     # share of the excess each end takes: 1/2 each, all to the free end, or none
     wi, wj = free[i].astype(float), free[j].astype(float)
     total = wi + wj
@@ -156,7 +157,7 @@ def provot_projection(x, indices, rest_length, free, max_strain=0.1, iterations=
     movable = total > 0
     n, dim = x.shape
     x = np.array(x, order="F")
-    for passes in range(int(iterations) + 1):
+    for passes in range(iterations + 1):
         strain = _strain(x, i, j, L0)
         worst = float(np.max(strain[movable], initial=0.0))
         if worst <= max_strain + tol + _ROUNDING or passes == iterations:
@@ -233,12 +234,16 @@ class ProvotConstraint:
                  method="jacobi"):
         self.indices = _indices(indices, "indices", 2)
         self.rest_length = as_float_array(rest_length, "rest_length", shape=(len(self.indices),))
+        n = count(n, "n", 1)
         if len(self.indices) and self.indices.max() >= n:
             raise ValueError(f"indices refer to particle {self.indices.max()} but n = {n}")
+        pinned = np.asarray(pinned, dtype=int).ravel()
+        if np.any((pinned < 0) | (pinned >= n)):
+            raise ValueError(f"pinned must hold particle indices from 0 to {n - 1}, got {pinned.tolist()}")
         self.free = np.ones(n, dtype=bool)
-        self.free[np.asarray(pinned, dtype=int)] = False
+        self.free[pinned] = False
         self.max_strain = nonnegative_number(max_strain, "max_strain")
-        self.iterations = int(positive_number(iterations, "iterations"))
+        self.iterations = count(iterations, "iterations", 1)
         self.tol = nonnegative_number(tol, "tol")
         if method not in ("gauss-seidel", "jacobi"):
             raise ValueError(f"method must be 'gauss-seidel' or 'jacobi', got {method!r}")

@@ -259,7 +259,8 @@ def string(n=20, length=1.0, *, pin="top", span=None, d=2, direction=None, scali
         ``"physical"``: mass per length (kg/m) and EA (N); then
         ``m = linear_density * L0`` (half at the ends) and ``k = EA / L0``.
     kd : float
-        Damping along every spring, in kg/s.
+        Damping along every spring, in kg/s, the same for every spring under
+        both scalings (``"physical"`` rescales masses and stiffnesses only).
     gravity : float
         In m/s^2, pointing down the last axis.
     damping : float
@@ -480,7 +481,8 @@ def cloth(nx=16, ny=16, width=1.0, height=1.0, *, pins="top corners", plane="ver
         Naive per-particle mass (kg), per-spring stiffnesses (N/m) and
         per-joint bending stiffness (N m).
     kd : float
-        Damping along every spring, in kg/s.
+        Damping along every spring, in kg/s, the same for every spring under
+        both scalings (``"physical"`` rescales masses and stiffnesses only).
     areal_density : float
         kg/m^2.
     stretch_modulus, shear_modulus, flexion_modulus : float

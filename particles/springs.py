@@ -43,6 +43,12 @@ def _indices(value, name, width):
     return a.astype(np.int64)
 
 
+def _check_fit(highest, n, name):
+    """Index arrays must point at particles of the system they act on (NumPy would clip or misplace)."""
+    if highest >= n:
+        raise ValueError(f"{name} refer to particle {highest}, but the system has only {n} particles")
+
+
 def _per_item(value, name, count, positive=False):
     """A number or an array of length count, checked, as a float array."""
     a = as_float_array(value, name, ndim=(0, 1))
@@ -106,9 +112,12 @@ class Springs(Force):
                 raise ValueError(f"indices refer to particle {ij.max()} but x has only {len(x)} particles")
             rest_length, _ = _unit(pair_differences(x, self.i, self.j))
         self.rest_length = _per_item(rest_length, "rest_length", s)
+        if np.any(self.rest_length < 0):
+            raise ValueError("rest_length must be >= 0 (in metres); 0 is a zero-length spring")
         self.k = _per_item(k, "k", s, positive=True)
         self.kd = _per_item(kd, "kd", s)
         self.kind = kind
+        self._highest = int(ij.max()) if s else -1
         self._incidence = None  # (n, s) sparse matrix with +1 at (i, s) and -1 at (j, s), built on first use
 
     def __len__(self):
@@ -129,6 +138,7 @@ class Springs(Force):
         return self.lengths(x) / self.rest_length - 1.0
 
     def add_to(self, F, x, v, t, m):
+        _check_fit(self._highest, len(x), "indices")
         d = pair_differences(x, self.i, self.j)             # x_i - x_j, shape (dim, s)
         L = np.sqrt(np.einsum("as,as->s", d, d))
         inv_L = 1.0 / np.maximum(L, 1e-300)                 # d = 0 when L = 0: no force
@@ -183,6 +193,7 @@ class Springs(Force):
         """
         x = np.asarray(x, dtype=float)
         n = len(x) if n is None else n
+        _check_fit(self._highest, min(n, len(x)), "indices")
         dim = x.shape[1]
         if damping_position_terms is None:
             damping_position_terms = not clamp
@@ -279,6 +290,7 @@ class Bending(Force):
         ijl = _indices(triples, "triples", 3)
         self.i, self.j, self.l = (ijl[:, c].copy() for c in range(3))
         b = len(ijl)
+        self._highest = int(ijl.max()) if b else -1
         self.kb = _per_item(kb, "kb", b)
         if rest_angle is None and x is not None:
             rest_angle = self.angles(as_float_array(x, "x", ndim=2))
@@ -298,6 +310,7 @@ class Bending(Force):
         return np.arccos(c)
 
     def add_to(self, F, x, v, t, m):
+        _check_fit(self._highest, len(x), "triples")
         L1, u1, L2, u2, c = self._geometry(x)
         theta = np.arccos(c)
         s = np.sqrt(np.maximum(1.0 - c * c, 0.0))

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from particles import SimulationDiverged
+from particles import ConvergenceError, SimulationDiverged
 from particles.implicit import BaraffWitkin, Prefactored, relax
 from particles.integrators import rk4
 from particles.massspring import cloth
@@ -106,7 +106,8 @@ def test_cg_and_direct_solvers_agree_and_iterations_are_reported():
     np.testing.assert_allclose(c1.X, c2.X, atol=1e-8)
     assert len(cg.iterations) == 6 and min(cg.iterations) > 5 and cg.converged
     capped = BaraffWitkin(stiff_cloth(), maxiter=3)
-    capped(None, capped.system.X, 0.0, 1 / 30)
+    with pytest.raises(ConvergenceError, match="did not reach the relative residual tol = 1e-06 within maxiter = 3"):
+        capped(None, capped.system.X, 0.0, 1 / 30)
     assert capped.iterations == [3] and not capped.converged
 
 
@@ -151,3 +152,14 @@ def test_implicit_steppers_check_their_input():
         Prefactored(c, 0.01, iterations=0)
     with pytest.raises(ValueError, match="linear_solver must be 'cg' or 'direct'"):
         BaraffWitkin(c, linear_solver="lu")
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"maxiter": 0}, "maxiter must be an integer >= 1, got 0"),
+    ({"maxiter": 2.5}, "maxiter must be an integer >= 1, got 2.5"),
+    ({"newton_iterations": 0}, "newton_iterations must be an integer >= 1, got 0"),
+])
+def test_baraff_witkin_rejects_bad_counts(options, message):
+    """Iteration caps must be positive integers, named in the error."""
+    with pytest.raises(ValueError, match=message):
+        BaraffWitkin(small_cloth(), **options)

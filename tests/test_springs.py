@@ -98,11 +98,25 @@ def test_coincident_particles_give_no_force():
         (dict(indices=[[0, 1]], rest_length=[1.0, 2.0]), r"rest_length must be a number or have shape \(1,\)"),
         (dict(indices=[[0, 1]]), "give rest_length, or positions x"),
         (dict(indices=[[0, 5]], x=np.zeros((2, 2))), "refer to particle 5 but x has only 2"),
+        (dict(indices=[[0, 1]], rest_length=-0.5), "rest_length must be >= 0"),
     ],
 )
 def test_bad_input(kwargs, match):
+    """Each bad argument is refused with a message naming it."""
     with pytest.raises(ValueError, match=match):
         Springs(**kwargs)
+
+
+def test_indices_beyond_the_system_are_refused_when_the_force_is_used():
+    """A spring or joint pointing at a particle the system does not have raises, instead of NumPy clipping it."""
+    x = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]])
+    springs = Springs([[0, 5]], rest_length=1.0)
+    with pytest.raises(ValueError, match="indices refer to particle 5, but the system has only 3 particles"):
+        springs(x)
+    with pytest.raises(ValueError, match="indices refer to particle 5, but the system has only 3 particles"):
+        springs.jacobians(x)
+    with pytest.raises(ValueError, match="triples refer to particle 7, but the system has only 3 particles"):
+        Bending([[0, 1, 7]], kb=1.0)(x)
 
 
 # -- bending -------------------------------------------------------------------
