@@ -163,6 +163,9 @@ class ParticleEffect:
         The live particles; per-particle ``birth``, ``lifetime``, ``tint``
         and ``emitter`` are in ``system.attributes``.
     children : list of ParticleEffect
+    steps : int
+        Steps this effect has taken as the root of its tree (they number the
+        step of a :class:`particles.SimulationDiverged`).
 
     Examples
     --------
@@ -203,6 +206,7 @@ class ParticleEffect:
         self._step = method_name(method, INTEGRATORS)
         self.rng = np.random.default_rng(seed)
         self.name = str(name)
+        self.steps = 0
         self.emitters, self.children = [], []
         for emitter in emitters:
             self.add_emitter(emitter)
@@ -263,18 +267,34 @@ class ParticleEffect:
         return self.size[0] + (self.size[1] - self.size[0]) * self.relative_age()
 
     def step(self, h):
-        """Advance the whole tree by `h` seconds: move, emit (parents first), remove the dead."""
+        """Advance the whole tree by `h` seconds: move, emit (parents first), remove the dead.
+
+        Parameters
+        ----------
+        h : float
+            Time step, in seconds, > 0.
+
+        Raises
+        ------
+        SimulationDiverged
+            When the step makes the state of an effect non-finite; it names
+            the step (counted in :attr:`steps`, 1 = the first), its start time
+            and the effect.
+        """
         h = positive_number(h, "h", "seconds")
         t0, t1 = self.t, self.t + h
         effects = list(self.tree())
+        step = self.steps + 1
         for effect in effects:  # a loop over effects
-            effect._move(t0, h)
+            effect._move(t0, h, step)
         for effect in effects:
             effect._emit(t0, t1)
         for effect in effects:
             effect._cull(t1)
+        self.steps = step
 
-    def _move(self, t0, h):
+    def _move(self, t0, h, step):
+        """Step 'step' of the tree (1 = its first): the ODE step, then collisions."""
         system = self.system
         if system.n == 0:
             system.t = t0 + h
@@ -283,7 +303,7 @@ class ParticleEffect:
         with np.errstate(over="ignore", invalid="ignore"):
             X = self._step(system.derivative, X_old, t0, h)
         if not np.all(np.isfinite(X)):
-            raise SimulationDiverged(0, t0, h, str(self.method), f"(in the effect {self.name!r})")
+            raise SimulationDiverged(step, t0, h, str(self.method), f"(in the effect {self.name!r})")
         system.X, system.t = np.asfortranarray(X), t0 + h
         if self.collider is not None:
             X, _ = self.collider.collide(X_old, system.X, t0, h, m=system.m)
@@ -353,6 +373,11 @@ class ParticleEffect:
         Returns
         -------
         list of Snapshot
+
+        Raises
+        ------
+        SimulationDiverged
+            As :meth:`step`.
         """
         if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
             raise ValueError(f"every must be a positive integer, got {every!r}")

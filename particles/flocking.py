@@ -32,6 +32,7 @@ References
 import numpy as np
 
 from ._checks import as_float_array, nonnegative_number, positive_number
+from .errors import SimulationDiverged
 from .forces import Force, pair_differences
 from .integrators import step_times
 from .neighbors import cell_pairs
@@ -211,6 +212,9 @@ class Flock:
     ----------
     system : ParticleSystem
         State and forces (``rules`` first).
+    steps : int
+        Steps taken since the flock was made (numbers the step of a
+        :class:`particles.SimulationDiverged`).
     """
 
     def __init__(self, x, v, rules, min_speed=0.0, max_speed=np.inf, forces=(), m=1.0):
@@ -223,6 +227,7 @@ class Flock:
             raise ValueError(f"max_speed must be >= min_speed, got {max_speed!r} < {min_speed!r}")
         self.system = ParticleSystem(x, v=v, m=m, forces=[rules, *forces])
         self._limit(self.system.X[:, 1])
+        self.steps = 0
 
     @property
     def t(self):
@@ -237,20 +242,53 @@ class Flock:
             v[:, k] *= scale
 
     def step(self, h):
-        """Advance by `h` seconds; returns the new state, shape (n, 2, d)."""
+        """Advance by `h` seconds.
+
+        Parameters
+        ----------
+        h : float
+            Time step, in seconds, > 0.
+
+        Returns
+        -------
+        ndarray, shape (n, 2, d)
+            A copy of the new state: positions (m) and velocities (m/s).
+
+        Raises
+        ------
+        SimulationDiverged
+            When the new state is not finite (a steering force overflowed);
+            the flock is then left as it was before the step.
+        """
         h = positive_number(h, "h", "seconds")
-        X = self.system.X
-        F = self.system.total_force(X, self.system.t)
-        v = X[:, 1]
-        for k in range(X.shape[2]):  # a loop over the d coordinates
-            v[:, k] += h * F[:, k] / self.system.m
-        self._limit(v)
-        X[:, 0] += h * v
-        self.system.t += h
+        X, t = self.system.X, self.system.t
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # a blow-up is reported below
+            F = self.system.total_force(X, t)
+            v = X[:, 1] + h * F / self.system.m[:, None]
+            self._limit(v)
+            x = X[:, 0] + h * v
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(v))):
+            raise SimulationDiverged(self.steps + 1, t, h, "symplectic_euler", self._blow_up_cause(F))
+        X[:, 1], X[:, 0] = v, x
+        self.system.t = t + h
+        self.steps += 1
         return self.system.state()
 
+    def _blow_up_cause(self, F):
+        """The likely cause of a non-finite step, for the message of SimulationDiverged."""
+        with np.errstate(invalid="ignore"):
+            largest = np.max(np.abs(F), initial=0.0)
+        reached = f"reached {largest:.3g} N" if np.isfinite(largest) else "overflowed"
+        return (f"(In the flock: the steering forces {reached}. The likely cause is a rule weight too large "
+                f"for boids this close: separation = {self.rules.separation:g} pushes with separation / "
+                "distance, without bound when two boids nearly coincide; lower the weights, or set max_force.)")
+
     def run(self, t_end, h, every=1):
-        """Simulate to `t_end`; returns times (K,) and states (K, n, 2, d) as :meth:`ParticleSystem.run`."""
+        """Simulate to `t_end`; returns times (K,) and states (K, n, 2, d) as :meth:`ParticleSystem.run`.
+
+        Raises :class:`particles.SimulationDiverged` as :meth:`step` does
+        (the flock then keeps the last finite state).
+        """
         if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
             raise ValueError(f"every must be a positive integer, got {every!r}")
         times = step_times(self.t, t_end, h)

@@ -299,3 +299,16 @@ def test_bad_input(make, match):
     """Mistakes raise ValueError naming the argument."""
     with pytest.raises(ValueError, match=match):
         make()
+
+
+def test_diverged_reports_the_step_it_happened_in():
+    """A force that turns infinite at t = 0.45 s stops the run at step 6 (t = 0.5 s), not 'step 0'."""
+    from particles import SimulationDiverged
+    from particles.forces import Field
+
+    burst = Field(lambda x, t: np.where(t >= 0.45, np.inf, 0.0) * np.ones_like(x))
+    jet = Emitter(100.0, Point([0.0, 0.0]), Cone([1.0, 0.0], 1.0), stop=0.2)
+    effect = ParticleEffect(2, [jet], forces=[burst], name="jet")
+    with pytest.raises(SimulationDiverged, match=r"step 6 \(t = 0\.5 s\).*'jet'") as info:
+        effect.run(1.0, h=0.1)
+    assert info.value.step == 6

@@ -158,3 +158,26 @@ def test_inputs_are_not_modified():
     v.setflags(write=False)
     Boids(1.0).accelerations(x, v)
     Flock(x, 5 * v, Boids(1.0), max_speed=2.0).run(0.5, 0.05)
+
+
+def test_a_blow_up_raises_simulation_diverged():
+    """Boids that overflow raise SimulationDiverged naming the step, the time and the cause, not NaNs."""
+    from particles import SimulationDiverged
+
+    flock = Flock([[0.0, 0.0], [0.0, 1e-7]], [[0.0, 0.0], [0.0, 0.0]], Boids(1.0, separation=1e300))
+    with pytest.raises(SimulationDiverged, match=r"step 1 \(t = 0 s\).*separation") as info:
+        flock.step(0.1)
+    assert info.value.step == 1
+    np.testing.assert_array_equal(flock.system.X[:, 0], [[0.0, 0.0], [0.0, 1e-7]])  # the state is kept
+
+
+def test_diverged_counts_the_steps():
+    """Two boids closing in at 2 m/s blow up on the step that brings them within R_s, step 14 at t = 1.3 s."""
+    from particles import SimulationDiverged
+
+    rules = Boids(1.0, separation=1e308, alignment=0.0, cohesion=0.0)  # R_s = 0.5 m, reached after 1.3 s
+    flock = Flock([[0.0, 0.0], [3.0, 0.0]], [[1.0, 0.0], [-1.0, 0.0]], rules)
+    with pytest.raises(SimulationDiverged, match=r"step 14 \(t = 1\.3 s\)") as info:
+        flock.run(5.0, 0.1)
+    assert info.value.step == 14 and info.value.t == pytest.approx(1.3)
+    assert np.all(np.isfinite(flock.system.X)) and flock.t == pytest.approx(1.3)
