@@ -333,6 +333,22 @@ def test_bounce_study_table():
     assert "backtrack  1.00        5" in format_bounce_table(study)
 
 
+def test_bounce_table_prints_the_height_ratios():
+    """The table prints the min-max of H_k / H_(k-1): eps^2 = 0.64 for backtracking, 0.65 to 0.70 for projection."""
+    from particles.studies.bounce import bounce_study, format_bounce_table
+
+    study = bounce_study(restitutions=(0.8,), h=0.01)
+    lo, hi = study["ratio"]["backtrack", 0.8]
+    assert lo == pytest.approx(0.64, abs=1e-12) and hi == pytest.approx(0.64, abs=1e-12)
+    lo, hi = study["ratio"]["project", 0.8]
+    assert 0.645 < lo < 0.66 and 0.695 < hi < 0.705  # measured 0.6540 and 0.7013
+    lines = format_bounce_table(study).splitlines()
+    assert "H_k / H_k-1" in lines[0]
+    assert lines[2].startswith("backtrack  0.80        6") and lines[2].endswith("0.6400 to 0.6400")
+    assert lines[3].startswith("project    0.80        6") and lines[3].endswith(f"{lo:.4f} to {hi:.4f}")
+    assert len({len(line) for line in lines}) == 1  # the columns line up
+
+
 @pytest.mark.parametrize("method", ["backtrack", "project"])
 @pytest.mark.parametrize("mu", [0.0, 0.2, 0.8])
 def test_block_on_a_slope_follows_coulomb_friction(method, mu):

@@ -70,25 +70,47 @@ def bounce_study(restitutions=(1.0, 0.8), methods=("backtrack", "project"), boun
     Returns
     -------
     dict
-        ``"heights"``: dict ``(method, eps)`` -> ndarray; ``"drift"``: dict
-        ``(method, eps)`` -> largest relative error of the heights against
-        ``H0 eps^(2k)`` over the bounces.
+        ``"heights"``: dict ``(method, eps)`` -> ndarray, in metres;
+        ``"drift"``: dict ``(method, eps)`` -> largest relative error of the
+        heights against ``H0 eps^(2k)`` over the bounces; ``"ratio"``: dict
+        ``(method, eps)`` -> ``(min, max)`` of the successive height ratios
+        ``H_k / H_(k-1)`` (``eps^2`` for every bounce when the response is
+        exact); ``"h"``: the time step, in seconds.
     """
-    heights, drift = {}, {}
+    heights, drift, ratio = {}, {}, {}
     for method in methods:  # a loop over the cases of the study
         for eps in restitutions:
             hk, _ = bounce_heights(method, eps, bounces if eps == 1 else 6, h)
             expected = eps ** (2 * np.arange(len(hk)))
             heights[method, eps] = hk
             drift[method, eps] = float(np.max(np.abs(hk / expected - 1.0)))
-    return {"heights": heights, "drift": drift, "h": h}
+            r = hk[1:] / hk[:-1]
+            ratio[method, eps] = (float(r.min()), float(r.max()))
+    return {"heights": heights, "drift": drift, "ratio": ratio, "h": h}
 
 
 def format_bounce_table(study):
-    """One line per case: method, eps, bounces, largest relative height error."""
-    lines = [f"{'method':<10}{'eps':>5}{'bounces':>9}   largest error of H_k / (H0 eps^2k)", "-" * 60]
+    """The study as a text table, one line per case.
+
+    Parameters
+    ----------
+    study : dict
+        As returned by :func:`bounce_study`.
+
+    Returns
+    -------
+    str
+        Columns: method, ``eps``, number of bounces, the largest relative
+        error ``|H_k / (H0 eps^(2k)) - 1|`` and the range (min to max) of the
+        successive height ratios ``H_k / H_(k-1)``, to compare with ``eps^2``.
+    """
+    error, ratio = "max |H_k / (H0 eps^2k) - 1|", "H_k / H_k-1, min to max"
+    header = f"{'method':<10}{'eps':>5}{'bounces':>9}{error:>30}{ratio:>26}"
+    lines = [header, "-" * len(header)]
     for (method, eps), d in study["drift"].items():
-        lines.append(f"{method:<10}{eps:>5.2f}{len(study['heights'][method, eps]) - 1:>9d}   {d:.2e}")
+        lo, hi = study["ratio"][method, eps]
+        lines.append(f"{method:<10}{eps:>5.2f}{len(study['heights'][method, eps]) - 1:>9d}{d:>30.2e}"
+                     f"{f'{lo:.4f} to {hi:.4f}':>26}")
     return "\n".join(lines)
 
 
