@@ -58,6 +58,8 @@ __all__ = [
 ]
 
 METHODS = ("project", "backtrack")
+UNIT_TOL = 1e-9
+"""Largest accepted ``| |n| - 1 |`` for the unit normals given to :func:`respond`."""
 
 
 def respond(v, n, restitution=1.0, friction=0.0):
@@ -74,7 +76,9 @@ def respond(v, n, restitution=1.0, friction=0.0):
     v : array_like, shape (k, d)
         Velocities at the contact, in m/s.
     n : array_like, shape (k, d)
-        Unit normals pointing out of the solid.
+        Unit normals pointing out of the solid (``|n| = 1`` within
+        :data:`UNIT_TOL`; a longer or shorter ``n`` would scale the response,
+        so it is rejected rather than silently normalized).
     restitution : float
         ``eps`` in [0, 1].
     friction : float
@@ -96,6 +100,12 @@ def respond(v, n, restitution=1.0, friction=0.0):
     """
     v = as_float_array(v, "v", ndim=2)
     n = as_float_array(n, "n", shape=v.shape)
+    length = np.sqrt(np.einsum("ij,ij->i", n, n))
+    wrong = np.abs(length - 1.0) > UNIT_TOL
+    if wrong.any():
+        k = int(np.argmax(wrong))
+        raise ValueError(f"n must be unit normals (|n| = 1 within {UNIT_TOL:g}), got |n| = {length[k]:.6g} "
+                         f"in row {k}; divide n by its length first")
     return _respond(v, n, _restitution(restitution), nonnegative_number(friction, "friction"))
 
 
@@ -247,7 +257,7 @@ class Collider:
         x, v : array_like, shape (n, d)
             Positions and velocities (not modified).
         m : float or array_like, shape (n,)
-            Masses, in kg, for the impulses.
+            Masses, in kg, > 0, for the impulses.
         pinned : array_like of int or bool
             Particles left untouched.
         t : float
@@ -261,7 +271,7 @@ class Collider:
         """
         x = np.array(as_float_array(x, "x", ndim=2), order="K")
         v = np.array(as_float_array(v, "v", shape=x.shape), order="K")
-        m = np.broadcast_to(as_float_array(m, "m", ndim=(0, 1)), (len(x),))
+        m = _masses(m, len(x))
         return self._project(x, v, m, self._free(len(x), pinned), float(t))
 
     def _project(self, x, v, m, free, t):
@@ -289,7 +299,7 @@ class Collider:
         h : float
             Step length, in seconds.
         m : float or array_like, shape (n,)
-            Masses, in kg (only used for the reported impulses).
+            Masses, in kg, > 0 (only used for the reported impulses).
         pinned : array_like of int or bool
             Particles left untouched (pinned cloth corners).
 
@@ -306,7 +316,7 @@ class Collider:
             raise ValueError(f"X_old and X_new must have the same shape, got {X_old.shape} and {X_new.shape}")
         h = positive_number(h, "h", "seconds")
         free = self._free(len(X_new), pinned)
-        m = np.broadcast_to(as_float_array(m, "m", ndim=(0, 1)), (len(X_new),))
+        m = _masses(m, len(X_new))
         return self._collide(X_old, X_new.copy(order="K"), float(t), h, m, free)
 
     def _collide(self, X_old, X, t, h, m, free):
@@ -493,6 +503,16 @@ def _push_directions(surface, x, p):
     if not ok.all():
         n[~ok] = surface.normal(x[~ok])
     return n
+
+
+def _masses(m, n):
+    """Masses as shape (n,), from a number or an array of shape (n,), all > 0 kg."""
+    m = as_float_array(m, "m")
+    if m.shape not in ((), (n,)):
+        raise ValueError(f"m must be a number or have shape ({n},), got shape {m.shape}")
+    if np.any(m <= 0):
+        raise ValueError("m must be positive: every mass must be > 0 kg")
+    return np.broadcast_to(m, (n,))
 
 
 def _count(value, name):

@@ -41,6 +41,7 @@ import numpy as np
 
 from ._checks import as_float_array, positive_number
 from .distributions import Cone, Disk, Point, SphereSurface, _at, _lifetime, _mean_spread, vary
+from .system import ParticleSystem
 
 __all__ = ["Point", "Disk", "SphereSurface", "Cone", "Births", "Emitter", "ParticleEmitter", "vary"]
 
@@ -80,6 +81,28 @@ class Births:
         return len(self.t)
 
 
+def _check_tint(tint):
+    """None, "random", "parent" or a Matplotlib colour (checked now, not at the first emission)."""
+    if tint is None or (isinstance(tint, str) and tint in ("random", "parent")):
+        return tint
+    from matplotlib.colors import to_rgba
+
+    try:
+        to_rgba(tint)
+    except (ValueError, TypeError):
+        raise ValueError(f"tint must be a Matplotlib colour, 'random', 'parent' or None, got {tint!r}") from None
+    return tint
+
+
+def _step_times(t0, t1):
+    """The two ends of a step, in seconds, checked: finite, ``t0 <= t1``."""
+    t0 = float(as_float_array(t0, "t0", ndim=0))
+    t1 = float(as_float_array(t1, "t1", ndim=0))
+    if t1 < t0:
+        raise ValueError(f"t1 must not be earlier than t0, got t0={t0!r}, t1={t1!r}")
+    return t0, t1
+
+
 class _Source:
     """What the two emitters share: initial velocities, lifetimes, masses, tints."""
 
@@ -89,7 +112,7 @@ class _Source:
         self.velocity = velocity
         self.lifetime = _lifetime(lifetime)
         self.mass = positive_number(mass, "mass", "kg")
-        self.tint = tint
+        self.tint = _check_tint(tint)
         self.axis = axis
 
     def _tints(self, rng, n, parent=None):
@@ -200,13 +223,14 @@ class Emitter(_Source):
         Parameters
         ----------
         t0, t1 : float
-            The step, in seconds, ``t0 <= t1``.
+            The step, in seconds, finite, ``t0 <= t1``.
         rng : numpy.random.Generator
 
         Returns
         -------
         Births
         """
+        t0, t1 = _step_times(t0, t1)
         a, b = max(t0, self.start), min(t1, self.stop)
         if a > self._seen:  # time not covered by any step (a simulation starting after `start`)
             self.phase += self.rate * (min(a, self.stop) - self._seen)  # at the mean rate, nobody born
@@ -274,6 +298,10 @@ class ParticleEmitter(_Source):
 
     def __init__(self, source, rate=None, count=None, when="alive", velocity=None, axis=None, inherit=0.0,
                  lifetime=None, mass=1.0, tint=None):
+        from .effects import ParticleEffect  # here: effects imports this module
+
+        if not isinstance(source, (ParticleSystem, ParticleEffect)):
+            raise ValueError(f"source must be a ParticleSystem or a ParticleEffect, got {type(source).__name__}")
         super().__init__(velocity, lifetime, mass, tint, axis)
         if when not in ("alive", "death"):
             raise ValueError(f"when must be 'alive' or 'death', got {when!r}")
@@ -286,8 +314,8 @@ class ParticleEmitter(_Source):
             if count is None:
                 raise ValueError("count (particles per parent) is needed when when='death'")
             self.burst = _mean_spread(count, "count", "particles")  # (mean, spread) per parent
-        self.system = getattr(source, "system", source)
-        self.effect = source if hasattr(source, "system") else None
+        self.effect = source if isinstance(source, ParticleEffect) else None
+        self.system = source.system if self.effect is not None else source
         if when == "death" and self.effect is None:
             raise ValueError("when='death' needs a source with lifetimes (a ParticleEffect)")
         if axis is not None and not (isinstance(axis, str) and axis == "velocity"):
@@ -308,7 +336,20 @@ class ParticleEmitter(_Source):
         return since, np.full(len(since), np.inf)
 
     def emit(self, t0, t1, rng):
-        """The particles born in the step ``(t0, t1]`` from all parents; see :class:`Emitter`."""
+        """The particles born in the step ``(t0, t1]`` from all parents.
+
+        Parameters
+        ----------
+        t0, t1 : float
+            The step, in seconds, finite, ``t0 <= t1``.
+        rng : numpy.random.Generator
+
+        Returns
+        -------
+        Births
+            Positions and velocities at birth (see :class:`Emitter`).
+        """
+        t0, t1 = _step_times(t0, t1)
         d = self.system.d
         born, dies = self._windows(t0, t1)
         done = self.system.attributes[self._key]

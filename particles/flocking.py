@@ -124,9 +124,20 @@ class Boids(Force):
         return obs, nb, r
 
     def accelerations(self, x, v):
-        """Steering accelerations, shape (n, d), in m/s^2."""
-        x = np.asarray(x, dtype=float)
-        v = np.asarray(v, dtype=float)
+        """Steering accelerations ``a_i`` of all boids.
+
+        Parameters
+        ----------
+        x, v : array_like, shape (n, d)
+            Positions (m) and velocities (m/s), finite, of the same shape.
+
+        Returns
+        -------
+        ndarray, shape (n, d)
+            Accelerations, in m/s^2 (at most `max_force` in length).
+        """
+        x = as_float_array(x, "x", ndim=2)
+        v = as_float_array(v, "v", shape=x.shape)
         n, d = x.shape
         a = np.zeros((n, d), order="F")
         if n < 2:
@@ -152,6 +163,19 @@ class Boids(Force):
         return a
 
     def add_to(self, F, x, v, t, m):
+        """Add the steering forces ``m a`` to `F`, in place.
+
+        Parameters
+        ----------
+        F : ndarray, shape (n, d)
+            Force accumulator, in newtons.
+        x, v : ndarray, shape (n, d)
+            Positions (m) and velocities (m/s).
+        t : float
+            Time, in seconds (unused: the rules do not depend on it).
+        m : float or ndarray, shape (n,)
+            Masses, in kg.
+        """
         a = self.accelerations(x, v)
         for k in range(F.shape[1]):  # a loop over the d coordinates
             F[:, k] += m * a[:, k]

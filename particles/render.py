@@ -20,6 +20,8 @@ from matplotlib.colors import to_rgba
 from mpl_toolkits.mplot3d.art3d import Line3DCollection
 from PIL import Image
 
+from ._checks import positive_number
+
 __all__ = ["draw_particles", "draw_springs", "animate", "animate_snapshots", "save_gif", "to_html", "GifWriter"]
 
 # Layers: static scenery, then springs, then blur, then the points on top.
@@ -199,7 +201,14 @@ def animate(frames, times=None, velocities=None, blur=None, limits=None, draw=No
         Call :func:`save_gif` or :func:`to_html` on it.
     """
     frames = [np.asarray(f, dtype=float) for f in frames]
+    if not frames:
+        raise ValueError("frames must hold at least one frame (an array of positions, shape (n, d)), got none")
+    for k, f in enumerate(frames):  # a loop over frames, not particles
+        if f.ndim != 2:
+            raise ValueError(f"frames[{k}] must have 2 dimensions (positions, shape (n, d)), got shape {f.shape}")
     d = frames[0].shape[1]
+    if d not in (2, 3) or any(f.shape[1] != d for f in frames):
+        raise ValueError(f"frames must all have shape (n_k, 2) or all (n_k, 3), got {[f.shape for f in frames]}")
     if springs is not None:
         springs = _check_springs(springs, len(frames[0]))
     fig, ax = _axes(d, figsize=figsize)
@@ -285,7 +294,25 @@ def animate_snapshots(snapshots, blur=None, **options):
 
     Colours, transparency and sizes come from the snapshots; `blur` draws
     motion blur from their velocities; other options go to :func:`animate`.
+
+    Parameters
+    ----------
+    snapshots : sequence of Snapshot
+        At least one, e.g. from :meth:`particles.effects.ParticleEffect.run`;
+        the positions of each are shape (n_k, d), in metres.
+    blur : float, optional
+        Exposure time of the motion blur, in seconds (segments ``(x, x + v blur)``).
+    **options
+        Passed to :func:`animate` (`limits`, `figsize`, `background`, ...).
+
+    Returns
+    -------
+    matplotlib.animation.FuncAnimation
+        One frame per snapshot, titled with its time.
     """
+    snapshots = list(snapshots)
+    if not snapshots:
+        raise ValueError("snapshots must hold at least one Snapshot, got none")
     return animate([s.x for s in snapshots], times=[s.t for s in snapshots],
                    velocities=[s.v for s in snapshots], blur=blur,
                    colors=[s.rgba for s in snapshots], sizes=[s.size for s in snapshots], **options)
@@ -321,11 +348,44 @@ class GifWriter(animation.AbstractMovieWriter):
 
 
 def save_gif(anim, path, fps=20, dpi=72):
-    """Write an animation to a looping GIF file; returns the path."""
+    """Write an animation to a looping GIF file.
+
+    Parameters
+    ----------
+    anim : matplotlib.animation.Animation
+        E.g. from :func:`animate`.
+    path : str or pathlib.Path
+        The file to write.
+    fps : float
+        Frames per second of the GIF, > 0 (each frame shows ``1 / fps``
+        seconds, rounded to whole milliseconds).
+    dpi : float
+        Resolution, in dots per inch, > 0: the image is ``figsize * dpi``
+        pixels.
+
+    Returns
+    -------
+    str or pathlib.Path
+        `path`, as given.
+    """
+    fps = positive_number(fps, "fps", "frames per second")
+    dpi = positive_number(dpi, "dpi", "dots per inch")
     anim.save(str(path), writer=GifWriter(fps=fps), dpi=dpi)
     return path
 
 
 def to_html(anim):
-    """The animation as an HTML/JavaScript player for a notebook cell."""
+    """The animation as an HTML/JavaScript player for a notebook cell.
+
+    Parameters
+    ----------
+    anim : matplotlib.animation.Animation
+        E.g. from :func:`animate`.
+
+    Returns
+    -------
+    str
+        HTML with the frames embedded as images, for
+        ``IPython.display.HTML`` or a ``.html`` file.
+    """
     return anim.to_jshtml()

@@ -305,6 +305,16 @@ def test_resolve_projects_a_state():
          "h must be a positive finite number"),
         (lambda: Collider(Plane([0, 0], [0, 1])).collide(np.zeros((3, 2, 2)), np.zeros((3, 2, 2)), 0, 0.1, pinned=[5]),
          r"pinned indices must lie in \[0, 3\)"),
+        (lambda: respond([[1.0, -1.0]], [[0.0, 2.0]]), r"n must be unit normals .* got \|n\| = 2"),
+        (lambda: respond([[1.0, -1.0]], [[0.0, 0.0]]), r"n must be unit normals .* got \|n\| = 0"),
+        (lambda: Collider(Plane([0, 0], [0, 1])).collide(np.zeros((3, 2, 2)), np.zeros((3, 2, 2)), 0, 0.1,
+                                                          m=[1.0, 2.0]), r"m must be a number or have shape \(3,\)"),
+        (lambda: Collider(Plane([0, 0], [0, 1])).collide(np.zeros((3, 2, 2)), np.zeros((3, 2, 2)), 0, 0.1, m=-1.0),
+         "m must be positive"),
+        (lambda: Collider(Plane([0, 0], [0, 1])).resolve(np.zeros((3, 2)), np.zeros((3, 2)), m=[1.0, 0.0, 1.0]),
+         "m must be positive"),
+        (lambda: Collider(Plane([0, 0], [0, 1])).resolve(np.zeros((3, 2)), np.zeros((3, 2)), m=np.ones((3, 1))),
+         r"m must be a number or have shape \(3,\)"),
     ],
 )
 def test_bad_input(make, match):

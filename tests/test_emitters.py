@@ -293,6 +293,15 @@ def test_three_generations():
         (lambda: ParticleEffect(2, color="red"), "color must be a ColorRamp"),
         (lambda: ColorRamp(["nocolour"]), "colors must be a list of Matplotlib colours"),
         (lambda: ParticleEffect(2).step(-0.1), "h must be a positive finite number"),
+        (lambda: Emitter(10.0, Point([0, 0])).emit(0.0, np.nan, np.random.default_rng(0)), "t1 must be finite"),
+        (lambda: Emitter(10.0, Point([0, 0])).emit(-np.inf, 1.0, np.random.default_rng(0)), "t0 must be finite"),
+        (lambda: Emitter(10.0, Point([0, 0])).emit(1.0, 0.5, np.random.default_rng(0)), "t1 must not be earlier"),
+        (lambda: ParticleEmitter(ParticleSystem([[0.0, 0.0]]), rate=1.0).emit(0.0, np.inf, np.random.default_rng(0)),
+         "t1 must be finite"),
+        (lambda: ParticleEmitter("x", rate=1), "source must be a ParticleSystem or a ParticleEffect, got str"),
+        (lambda: Emitter(10.0, Point([0, 0]), tint="nocolour"), "tint must be a Matplotlib colour"),
+        (lambda: ParticleEmitter(ParticleSystem([[0.0, 0.0]]), rate=1.0, tint=(1.0, 2.0)),
+         "tint must be a Matplotlib colour"),
     ],
 )
 def test_bad_input(make, match):

@@ -143,6 +143,8 @@ def test_polarization_and_spread_values():
          "max_speed must be >= min_speed"),
         (lambda: Flock([[0.0, 0.0]], [[1.0, 0.0]], "boids"), "rules must be a Boids object"),
         (lambda: Containment([0.0, 0.0], [0.0, 1.0]), "hi must exceed lo"),
+        (lambda: Boids(1.0).accelerations(np.zeros((3, 2)), np.zeros((2, 2))), r"v must have shape \(3, 2\)"),
+        (lambda: Boids(1.0).accelerations(np.zeros(3), np.zeros(3)), "x must have 2 dimensions"),
     ],
 )
 def test_bad_input(make, match):

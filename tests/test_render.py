@@ -127,3 +127,19 @@ def test_springs_of_the_wrong_shape_are_rejected():
     with pytest.raises(ValueError, match=r"springs must index particles in \[0, 6\)"):
         render.draw_springs(ax, x, springs + 1)
     plt.close(fig)
+
+
+@pytest.mark.parametrize(
+    "make, match",
+    [
+        (lambda: render.animate([]), "frames must hold at least one frame"),
+        (lambda: render.animate([np.zeros((3, 2)), np.zeros(3)]), r"frames\[1\] must have 2 dimensions"),
+        (lambda: render.animate_snapshots([]), "snapshots must hold at least one Snapshot"),
+        (lambda: render.save_gif(object(), "never.gif", fps=0), "fps must be a positive finite number"),
+        (lambda: render.save_gif(object(), "never.gif", dpi=-72), "dpi must be a positive finite number"),
+    ],
+)
+def test_bad_input(make, match):
+    """Mistakes raise ValueError naming the argument, before anything is drawn or written."""
+    with pytest.raises(ValueError, match=match):
+        make()
