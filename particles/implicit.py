@@ -297,9 +297,11 @@ def relax(system, h=0.05, tol=1e-8, max_steps=2000, method="auto"):
         ``"newton"`` method's continuation.
     tol : float
         Relative force tolerance: stop when the largest net force on a free
-        particle is below ``tol`` times the largest one at the start
-        (``"newton"``: at most ``max(tol, 1e-6)``, the floor set by its
-        finite-difference Jacobian).
+        particle is below ``tol`` times the force scale, the larger of the
+        largest net force at the start and the largest force any one force
+        object applies (so that a system already at equilibrium returns at
+        once); ``"newton"``: at most ``max(tol, 1e-6)`` times it, the floor
+        set by its finite-difference Jacobian.
     max_steps : int
         Largest number of pseudo time steps.
     method : {"auto", "implicit", "newton"}
@@ -335,7 +337,13 @@ def relax(system, h=0.05, tol=1e-8, max_steps=2000, method="auto"):
     free = np.setdiff1d(np.arange(system.n), system.pinned)
     X = system.X.copy(order="K")
     X[:, 1] = 0.0
+    # the force scale: the larger of the net force at the start and the largest force any one force
+    # applies (at an equilibrium the net force is ~0 but gravity and the springs are not)
     scale = max(np.max(np.abs(system.total_force(X, system.t)[free]), initial=0.0), 1e-300)
+    for force in system.forces:  # a loop over the few force objects
+        F_one = np.zeros_like(X[:, 0])
+        force.add_to(F_one, X[:, 0], X[:, 1], system.t, system.m)
+        scale = max(scale, np.max(np.abs(F_one[free]), initial=0.0))
     if method == "newton":
         mass = np.repeat(system.m[free], system.d)
 

@@ -6,7 +6,7 @@ import pytest
 from particles import ConvergenceError, SimulationDiverged
 from particles.implicit import BaraffWitkin, Prefactored, relax
 from particles.integrators import rk4
-from particles.massspring import cloth
+from particles.massspring import cloth, string
 
 
 def stiff_cloth(**options):
@@ -163,3 +163,12 @@ def test_baraff_witkin_rejects_bad_counts(options, message):
     """Iteration caps must be positive integers, named in the error."""
     with pytest.raises(ValueError, match=message):
         BaraffWitkin(small_cloth(), **options)
+
+
+def test_relax_returns_at_once_from_an_equilibrium():
+    """Relaxing a system that is already at rest in equilibrium takes no step (no ConvergenceError)."""
+    s = string(10, 1.0)
+    relax(s)
+    x = s.X[:, 0].copy()
+    assert relax(s) == 0
+    np.testing.assert_array_equal(s.X[:, 0], x)
