@@ -36,7 +36,11 @@ def _study(args):
 def _site(args):
     from .site import build_site
 
-    build_site(args.out, args.lectures, timeout=args.timeout)
+    try:
+        build_site(args.out, args.lectures, timeout=args.timeout)
+    except ValueError as error:  # a missing or empty lectures folder
+        print(f"particles site: {error}", file=sys.stderr)
+        return 2
     return 0
 
 

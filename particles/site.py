@@ -36,7 +36,23 @@ display:flex;gap:16px;position:sticky;top:0;z-index:100}
 
 
 def lecture_notebooks(folder="lectures"):
-    """Lecture notebooks ``NN_*.ipynb`` of `folder`, in lecture order."""
+    """Lecture notebooks ``NN_*.ipynb`` of `folder`, in lecture order.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The lectures folder.
+
+    Returns
+    -------
+    list of Path
+        Sorted by file name, so by lecture number; other notebooks are left out.
+
+    Raises
+    ------
+    ValueError
+        When `folder` does not exist.
+    """
     folder = Path(folder)
     if not folder.is_dir():
         raise ValueError(f"lectures folder {str(folder)!r} does not exist")
@@ -45,6 +61,15 @@ def lecture_notebooks(folder="lectures"):
 
 def execute_notebook(path, timeout=600, kernel_name="python3"):
     """Run a notebook top to bottom in a fresh kernel (working directory: its folder).
+
+    Parameters
+    ----------
+    path : str or Path
+        The notebook file.
+    timeout : float
+        Seconds allowed per cell.
+    kernel_name : str
+        The Jupyter kernel to start.
 
     Returns
     -------
@@ -67,7 +92,17 @@ def execute_notebook(path, timeout=600, kernel_name="python3"):
 
 
 def notebook_summary(nb):
-    """Title (first heading) and first sentence of prose of a notebook."""
+    """Title (first heading) and first sentence of prose of a notebook, for the site's index.
+
+    Parameters
+    ----------
+    nb : nbformat.NotebookNode
+
+    Returns
+    -------
+    title, summary : str
+        ``"Untitled"`` and ``""`` when the notebook has no heading or prose.
+    """
     title, summary = None, ""
     for cell in nb.cells:
         if cell.cell_type != "markdown":
@@ -121,11 +156,11 @@ def build_site(out="site", lectures="lectures", executed=None, timeout=600, log=
     """
     from nbconvert import HTMLExporter
 
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     paths = lecture_notebooks(lectures)
     if not paths:
         raise ValueError(f"no lecture notebooks NN_topic.ipynb in {str(lectures)!r}")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
     executed = dict(executed or {})
     exporter = HTMLExporter(template_name="lab")
     notebooks, pages = [], []

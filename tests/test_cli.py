@@ -52,3 +52,10 @@ def test_console_script_help():
 def test_unknown_command_fails_cleanly():
     result = subprocess.run([sys.executable, "-m", "particles", "fly"], capture_output=True, text=True)
     assert result.returncode == 2 and "invalid choice" in result.stderr
+
+
+def test_site_with_a_missing_lectures_folder_fails_cleanly(tmp_path, capsys):
+    """`particles site` names the missing folder, exits 2, and creates no output folder."""
+    assert main(["site", "--lectures", str(tmp_path / "nowhere"), "--out", str(tmp_path / "site")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    assert not (tmp_path / "site").exists()
