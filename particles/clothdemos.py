@@ -31,6 +31,30 @@ def _record(system, step, seconds, fps, h_max):
 @register("cloth", "3D: a curtain pinned at two corners, falling and swinging in a gusty wind (Provot's constraint)",
           preview=dict(seconds=2.0))
 def hanging_cloth(seconds=4.0, fps=12, seed=0):
+    """A 16 x 16 cloth pinned at its two top corners, falling and swinging in a gusty wind, in 3D.
+
+    Physical scaling (stretch modulus 100 N/m, damping 0.2), symplectic
+    Euler at half its stability limit, and Provot's constraint holding the
+    springs near their rest lengths.
+
+    Parameters
+    ----------
+    seconds : float
+        Simulated time, in seconds (default 4.0).
+    fps : float
+        Frames recorded per simulated second (default 12); the step is
+        shortened so that a whole number of steps fits in a frame.
+    seed : int
+        Unused (the demo is deterministic); kept for the common signature
+        of :func:`particles.demos.run_demo`.
+
+    Returns
+    -------
+    DemoData
+        Per frame, positions and velocities of shape (256, 3) (m, m/s), the
+        structural springs as index pairs (p, 2) drawn as lines;
+        ``info``: the largest strain over the run and the time step.
+    """
     c = cloth(16, 16, plane="horizontal", pins="top corners", scaling="physical", stretch_modulus=100.0,
               damping=0.2, wind=[0.0, 2.0, 0.0])
     provot = ProvotConstraint.from_system(c)
@@ -46,6 +70,30 @@ def hanging_cloth(seconds=4.0, fps=12, seed=0):
 @register("drape", "3D: a cloth falling onto a sphere and the floor (collisions with friction)",
           preview=dict(seconds=2.0))
 def draped_cloth(seconds=3.0, fps=12, seed=0):
+    """A free 20 x 20 cloth, 1.2 m wide, falling onto a sphere and the floor, in 3D.
+
+    The sphere (radius 0.4 m) and the floor ``z = -0.4`` m collide with
+    the cloth by projection (restitution 0, friction 0.5) after each step of
+    symplectic Euler with Provot's constraint, at 0.9 of the stability limit.
+
+    Parameters
+    ----------
+    seconds : float
+        Simulated time, in seconds (default 3.0).
+    fps : float
+        Frames recorded per simulated second (default 12); the step is
+        shortened so that a whole number of steps fits in a frame.
+    seed : int
+        Unused (the demo is deterministic); kept for the common signature
+        of :func:`particles.demos.run_demo`.
+
+    Returns
+    -------
+    DemoData
+        Per frame, positions and velocities of shape (400, 3) (m, m/s), the
+        structural springs as index pairs (p, 2); ``info``: the deepest
+        point inside the sphere and the time step.
+    """
     c = cloth(20, 20, width=1.2, height=1.2, plane="horizontal", origin=(-0.6, -0.6, 0.5), pins=None,
               scaling="physical", stretch_modulus=200.0, damping=0.5)
     ball, floor = Sphere([0.0, 0.0, 0.0], 0.4), Plane([0.0, 0.0, -0.4], [0.0, 0.0, 1.0])

@@ -155,10 +155,36 @@ class Contacts:
 
     @classmethod
     def empty(cls, d):
+        """No contacts.
+
+        Parameters
+        ----------
+        d : int
+            Dimension of space, 2 or 3.
+
+        Returns
+        -------
+        Contacts
+            With ``index`` and ``time`` of shape (0,) and the vectors of shape (0, d).
+        """
         return cls(np.zeros(0, dtype=int), np.zeros(0), *(np.zeros((0, d)) for _ in range(4)))
 
     @classmethod
     def concatenate(cls, parts, d):
+        """All the contacts of several calls (e.g. the steps of a run), in order.
+
+        Parameters
+        ----------
+        parts : sequence of Contacts
+            Each with vectors of shape (k_i, d); empty ones are skipped.
+        d : int
+            Dimension of space, for the result when there are no contacts.
+
+        Returns
+        -------
+        Contacts
+            Rows of shape (sum k_i,) and (sum k_i, d), the parts one after the other.
+        """
         parts = [p for p in parts if len(p)]
         if not parts:
             return cls.empty(d)

@@ -122,7 +122,25 @@ def register(name, description, preview=None):
 
 
 def run_demo(name, seconds=None, fps=None, seed=0):
-    """Compute the data of the demo `name` (defaults of the demo when seconds/fps are None)."""
+    """Compute the data of the demo `name`, drawing nothing.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`DEMOS` (``"fountain"``, ``"flock"``, ...).
+    seconds : float, optional
+        Simulated time, in seconds (None: the demo's default).
+    fps : float, optional
+        Frames recorded per simulated second (None: the demo's default).
+    seed : int
+        Seed of the demo's random numbers.
+
+    Returns
+    -------
+    DemoData
+        Positions per frame, shape (n_k, d) in metres, with colours, sizes
+        and scenery; :func:`animate_demo` draws it.
+    """
     if name not in DEMOS:
         raise ValueError(f"unknown demo {name!r}; expected one of {', '.join(map(repr, DEMOS))}")
     options = {k: v for k, v in (("seconds", seconds), ("fps", fps)) if v is not None}
@@ -158,6 +176,31 @@ def _from_effect(effect, name, title, seconds, fps, h, **options):
 @register("fountain", "3D: water from a nozzle, splashing on the ground (collisions, lifetimes)",
           preview=dict(seconds=2.4))
 def fountain(seconds=4.0, fps=10, seed=0):
+    """Water from a nozzle under gravity, splashing on the ground: collisions and lifetimes, in 3D.
+
+    A disk nozzle of radius 4 cm emits 250 drops/s upwards in a cone
+    (4.4 m/s, half-angle 0.3 rad), each living 2.4 +- 0.4 s; gravity, light
+    damping and the ground ``z = 0`` (restitution 0.3, friction 0.6, with
+    backtracking) act on them; drops leaving the box ``[-3, 3]^2 x [-1, 3]``
+    m are removed. Steps of 1/40 s.
+
+    Parameters
+    ----------
+    seconds : float
+        Simulated time, in seconds (default 4.0).
+    fps : float
+        Frames recorded per simulated second (default 10); the time step
+        is the demo's own, so `fps` does not change the physics.
+    seed : int
+        Seed of the emitter's random numbers.
+
+    Returns
+    -------
+    DemoData
+        Per frame, positions and velocities of shape (n_k, 3) (m, m/s; the
+        number of drops changes), RGBA colours (n_k, 4) by age and marker
+        areas (n_k,); ``info["most particles"]``: the largest count.
+    """
     nozzle = Emitter(250.0, Disk([0.0, 0.0, 0.05], 0.04), Cone([0, 0, 1], 4.4, 0.3, angle=0.3),
                      lifetime=(2.4, 0.4))
     ground = Collider(Plane([0, 0, 0], [0, 0, 1]), restitution=0.3, friction=0.6)
@@ -172,6 +215,32 @@ def fountain(seconds=4.0, fps=10, seed=0):
 @register("fireworks", "2D: rockets with trails and bursts, systems of systems (Reeves' hierarchy)",
           preview=dict(seconds=3.6))
 def fireworks(seconds=5.0, fps=15, seed=0):
+    """Rockets with trails and bursts, systems of systems (Reeves' hierarchy), in 2D.
+
+    A launcher fires about 1.6 rockets/s (12 m/s, random tints); each
+    rocket is the emitter of a child effect of trails (90 particles/s) and,
+    when it dies after about 1.1 s, of a burst of 140 +- 40 sparks, some of
+    which crackle when they die in turn. Steps of 1/30 s; the launcher stops
+    1.8 s before the end so that the last bursts are seen.
+
+    Parameters
+    ----------
+    seconds : float
+        Simulated time, in seconds (default 5.0).
+    fps : float
+        Frames recorded per simulated second (default 15); the time step
+        is the demo's own, so `fps` does not change the physics.
+    seed : int
+        Seed of the launcher; the child effects use seed + 1, + 2 and + 3.
+
+    Returns
+    -------
+    DemoData
+        Per frame, positions and velocities of shape (n_k, 2) (m, m/s) of
+        all rockets, trails, sparks and crackle together, RGBA colours
+        (n_k, 4) and marker areas (n_k,), on a black background;
+        ``info["most particles"]``: the largest count.
+    """
     g = forces.Gravity([0.0, -9.81])
     launcher = Emitter(1.6, Point([0.0, 0.0]), Cone([0, 1], 12.0, 1.5, angle=0.3), lifetime=(1.1, 0.2),
                        rate_spread=0.8, start=-0.55, stop=max(seconds - 1.8, 0.5), tint="random")  # first at 0.1 s
@@ -196,6 +265,30 @@ def fireworks(seconds=5.0, fps=15, seed=0):
 @register("smoke", "2D: a moving chimney, gravity pointing up, wind gusts; puffs grow and fade",
           preview=dict(seconds=3.0))
 def smoke(seconds=4.0, fps=15, seed=0):
+    """Smoke from a moving chimney: gravity pointing up, damping, wind gusts, in 2D.
+
+    A disk of radius 0.12 m swinging as ``0.8 sin(0.9 t)`` m emits 120
+    puffs/s, which inherit half its velocity, rise under an upward "gravity"
+    of 0.35 m/s^2, are slowed by damping and blown by gusty wind; they grow
+    from 25 to 300 points^2 and fade out over their 3.5 +- 1 s. Steps of 1/30 s.
+
+    Parameters
+    ----------
+    seconds : float
+        Simulated time, in seconds (default 4.0).
+    fps : float
+        Frames recorded per simulated second (default 15); the time step
+        is the demo's own, so `fps` does not change the physics.
+    seed : int
+        Seed of the emitter's random numbers.
+
+    Returns
+    -------
+    DemoData
+        Per frame, positions and velocities of shape (n_k, 2) (m, m/s),
+        RGBA colours (n_k, 4) fading with age and marker areas (n_k,) growing
+        with it; ``info["most particles"]``: the largest count.
+    """
     chimney = Disk(lambda t: np.stack([0.8 * np.sin(0.9 * t), np.zeros_like(t)], axis=-1), 0.12)
     source = Emitter(120.0, chimney, Cone([0, 1], 0.5, 0.3, angle=0.6), lifetime=(3.5, 1.0), inherit=0.5)
     puffs = ParticleEffect(
@@ -210,6 +303,30 @@ def smoke(seconds=4.0, fps=15, seed=0):
 @register("bouncing", "2D: balls in a box with a ramp and an obstacle (restitution 0.95, backtracking)",
           preview=dict(seconds=2.4))
 def bouncing(seconds=4.0, fps=15, seed=0):
+    """Balls in a box with a ramp and a round obstacle: restitution 0.95, friction, backtracking, in 2D.
+
+    Up to 24 balls start at random in the upper part of the 4 m x 3 m box
+    (those that would start inside the obstacle or below the ramp are left out) with random
+    velocities; gravity, velocity Verlet with steps of 1/90 s and
+    :class:`particles.collisions.Collider` with ``method="backtrack"``.
+
+    Parameters
+    ----------
+    seconds : float
+        Simulated time, in seconds (default 4.0).
+    fps : float
+        Frames recorded per simulated second (default 15); the time step
+        is the demo's own, so `fps` does not change the physics.
+    seed : int
+        Seed of the initial positions and velocities.
+
+    Returns
+    -------
+    DemoData
+        Per frame, positions and velocities of shape (n, 2) (m, m/s; the
+        same n balls throughout), one colour per ball (n, 4) and areas (n,);
+        ``info``: the number of contacts and the fraction of the energy kept.
+    """
     rng = np.random.default_rng(seed)
     n = 24
     x = np.column_stack([rng.uniform(0.3, 3.7, n), rng.uniform(1.8, 2.8, n)])
@@ -240,6 +357,29 @@ def _palette(n):
 
 @register("flock", "2D: Reynolds' boids from random headings to one flock; the camera follows it")
 def flock(seconds=8.0, fps=10, seed=0):
+    """200 boids from random headings to one flock (Reynolds' rules), in 2D; the camera follows it.
+
+    The rules and limits of tests/test_flocking.py: radius 3 m, separation
+    0.1, alignment 2, cohesion 0.5, steering at most 3 m/s^2, speeds within
+    [0.5, 2] m/s; steps of 1/50 s. Each boid is coloured by its heading.
+
+    Parameters
+    ----------
+    seconds : float
+        Simulated time, in seconds (default 8.0).
+    fps : float
+        Frames recorded per simulated second (default 10); the time step
+        is the demo's own, so `fps` does not change the physics.
+    seed : int
+        Seed of the initial positions (uniform in a 10 m square) and headings.
+
+    Returns
+    -------
+    DemoData
+        Per frame, positions relative to the flock's centre and velocities,
+        shape (200, 2) (m, m/s), colours (200, 4) by heading and areas
+        (200,); ``info["polarization"]``: its first and last values.
+    """
     from matplotlib.colors import hsv_to_rgb
 
     rng = np.random.default_rng(seed)
@@ -265,6 +405,30 @@ def flock(seconds=8.0, fps=10, seed=0):
 @register("genesis", "3D: Reeves' Genesis effect, an expanding ring of secondary systems over a planet",
           preview=dict(seconds=2.4))
 def genesis(seconds=3.6, fps=15, seed=0):
+    """Reeves' Genesis effect: an expanding ring of secondary particle systems over a planet, in 3D.
+
+    A ring on the unit sphere, its polar angle growing as ``0.6 t`` rad,
+    emits 120 short-lived particles/s; each is itself the emitter of a
+    child "fire" effect (18 particles/s, shot outwards from the planet's
+    centre, pulled back by an attractor and slowed by damping). Steps of 1/30 s.
+
+    Parameters
+    ----------
+    seconds : float
+        Simulated time, in seconds (default 3.6).
+    fps : float
+        Frames recorded per simulated second (default 15); the time step
+        is the demo's own, so `fps` does not change the physics.
+    seed : int
+        Seed of the ring emitter; the fire uses seed + 1.
+
+    Returns
+    -------
+    DemoData
+        Per frame, positions and velocities of shape (n_k, 3) (m, m/s) of
+        both generations, RGBA colours (n_k, 4) and areas (n_k,), on a black
+        background; ``info["most particles"]``: the largest count.
+    """
     planet = np.zeros(3)
     ring = SphereSurface(planet, 1.0, polar=lambda t: (0.6 * t, 0.6 * t + 0.12))
     systems = ParticleEffect(3, [Emitter(120.0, ring, lifetime=(0.7, 0.2))], size=2.0, seed=seed,

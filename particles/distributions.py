@@ -98,10 +98,37 @@ class Point:
         self.d = _at(self.center, np.zeros(1)).shape[1]
 
     def sample(self, rng, t):
-        """Positions, shape (n, d), for particles born at times `t` (shape (n,))."""
+        """Positions of particles born at times `t`: the point (where it is at each time).
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            Random numbers (unused: a point has no randomness).
+        t : ndarray, shape (n,)
+            Birth times, in seconds (where a moving centre is then).
+
+        Returns
+        -------
+        ndarray, shape (n, d)
+            Positions, in metres, all at the centre.
+        """
         return np.array(_at(self.center, t))
 
     def normal(self, x, t):
+        """The normal used by ``axis="normal"`` of an emitter: a point has none.
+
+        Parameters
+        ----------
+        x : ndarray, shape (n, d)
+            Positions of the newborn particles, in metres (unused).
+        t : ndarray, shape (n,)
+            Their birth times, in seconds (unused).
+
+        Returns
+        -------
+        None
+            The velocity cone keeps its own direction.
+        """
         return None
 
 
@@ -126,6 +153,20 @@ class Disk(Point):
             raise ValueError("normal must be a non-zero vector")
 
     def sample(self, rng, t):
+        """Positions uniform over the disk, per unit area (radius ``R sqrt(u)``, ``u`` uniform in [0, 1]).
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            Random numbers.
+        t : ndarray, shape (n,)
+            Birth times, in seconds (where a moving centre is then).
+
+        Returns
+        -------
+        ndarray, shape (n, d)
+            Positions, in metres, within `radius` of the centre at each birth time.
+        """
         c = _at(self.center, t)
         n, d = c.shape
         r = self.radius * np.sqrt(rng.random(n))  # sqrt: uniform per unit area
@@ -139,6 +180,20 @@ class Disk(Point):
         return np.array([0.0, 0.0, 1.0]) if self.axis is None else self.axis / np.linalg.norm(self.axis)
 
     def normal(self, x, t):
+        """The disk's unit normal at every particle: its axis in 3D, ``(0, 1)`` (up) in 2D.
+
+        Parameters
+        ----------
+        x : ndarray, shape (n, d)
+            Positions of the newborn particles, in metres (only their number and dimension are used).
+        t : ndarray, shape (n,)
+            Their birth times, in seconds (unused).
+
+        Returns
+        -------
+        ndarray, shape (n, d)
+            Unit vectors (a read-only broadcast view).
+        """
         return np.broadcast_to(self._axis3() if x.shape[1] == 3 else [0.0, 1.0], x.shape)
 
 
@@ -176,6 +231,23 @@ class SphereSurface(Point):
         return lo, hi
 
     def sample(self, rng, t):
+        """Positions uniform per unit area over the sphere, or over its band ``lo <= theta <= hi`` from the pole.
+
+        In 3D ``cos(theta)`` is uniform (Archimedes' hat-box theorem); in 2D
+        (a circle) ``theta`` is uniform, on either side of the pole.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            Random numbers.
+        t : ndarray, shape (n,)
+            Birth times, in seconds (where a moving centre is then).
+
+        Returns
+        -------
+        ndarray, shape (n, d)
+            Positions, in metres, at distance `radius` from the centre at each birth time.
+        """
         c = _at(self.center, t)
         n, d = c.shape
         if self.polar is None:
@@ -199,6 +271,20 @@ class SphereSurface(Point):
         return c + self.radius * direction
 
     def normal(self, x, t):
+        """The outward unit normal ``(x - c(t)) / |x - c(t)|`` at each particle.
+
+        Parameters
+        ----------
+        x : ndarray, shape (n, d)
+            Positions of the newborn particles, in metres, on (or off) the sphere.
+        t : ndarray, shape (n,)
+            Their birth times, in seconds (where a moving centre was).
+
+        Returns
+        -------
+        ndarray, shape (n, d)
+            Unit vectors away from the centre.
+        """
         r = x - _at(self.center, t)
         return r / np.linalg.norm(r, axis=1)[:, None]
 
