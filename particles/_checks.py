@@ -88,3 +88,11 @@ def count(value, name, least=0):
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < least:
         raise ValueError(f"{name} must be an integer >= {least}, got {value!r}")
     return int(value)
+
+
+def finite_real(value, name, unit=""):
+    """Return `value` as a float after checking it is a finite real number (a time, a coordinate)."""
+    what = "a finite real number" + (f" (in {unit})" if unit else "")
+    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
+        value = value[()]
+    return _real(value, name, what)

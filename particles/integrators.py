@@ -29,7 +29,7 @@ import numpy as np
 import scipy.sparse
 import scipy.sparse.linalg
 
-from ._checks import as_float_array, method_name, positive_number
+from ._checks import as_float_array, count, finite_real, method_name, nonnegative_number, positive_number
 from .errors import ConvergenceError, SimulationDiverged
 
 __all__ = [
@@ -55,6 +55,21 @@ def _stepper(order, explicit=True, second_order_layout=False):
         return step
 
     return mark
+
+
+def _arguments(X, t, h):
+    """Check a stepper's arguments: `X` finite reals, `t` a finite real, `h` > 0.
+
+    Returns ``X`` as a float array (no copy for a float array) and ``h`` as a
+    float; `t` is only checked, and reaches ``f`` as the caller gave it.
+    One pass of ``np.isfinite`` over ``X``: cheap next to evaluating ``f``.
+    """
+    X = as_float_array(X, "X", finite=False)
+    if not np.isfinite(X).all():
+        raise ValueError("X must be finite, but it contains inf or NaN")
+    if not (type(t) is int or isinstance(t, float) and math.isfinite(t)):  # fast path first
+        finite_real(t, "t", "seconds")
+    return X, positive_number(h, "h", "seconds")
 
 
 def _evaluate(f, X, t):
@@ -110,8 +125,7 @@ def euler(f, X, t, h):
     >>> euler(lambda X, t: -X, np.array([1.0]), 0.0, 0.1)
     array([0.9])
     """
-    X = np.asarray(X, dtype=float)
-    h = positive_number(h, "h", "seconds")
+    X, h = _arguments(X, t, h)
     return X + h * _evaluate(f, X, t)
 
 
@@ -128,8 +142,7 @@ def midpoint(f, X, t, h):
     Second order, two evaluations of ``f`` per step. On the undamped oscillator
     the amplitude grows by ``sqrt(1 + (w h)**4 / 4)`` per step: slowly unstable.
     """
-    X = np.asarray(X, dtype=float)
-    h = positive_number(h, "h", "seconds")
+    X, h = _arguments(X, t, h)
     X_m = X + 0.5 * h * _evaluate(f, X, t)
     return X + h * _evaluate(f, X_m, t + 0.5 * h)
 
@@ -147,8 +160,7 @@ def trapezoid(f, X, t, h):
     Second order, two evaluations of ``f`` per step. For linear problems it
     gives the same result as :func:`midpoint`.
     """
-    X = np.asarray(X, dtype=float)
-    h = positive_number(h, "h", "seconds")
+    X, h = _arguments(X, t, h)
     f_0 = _evaluate(f, X, t)
     f_1 = _evaluate(f, X + h * f_0, t + h)
     return X + 0.5 * h * (f_0 + f_1)
@@ -169,8 +181,7 @@ def rk4(f, X, t, h):
     it is stable for ``w h <= 2 sqrt(2) ~ 2.83`` (with slow amplitude decay below
     that limit).
     """
-    X = np.asarray(X, dtype=float)
-    h = positive_number(h, "h", "seconds")
+    X, h = _arguments(X, t, h)
     k1 = _evaluate(f, X, t)
     k2 = _evaluate(f, X + 0.5 * h * k1, t + 0.5 * h)
     k3 = _evaluate(f, X + 0.5 * h * k2, t + 0.5 * h)
@@ -205,8 +216,7 @@ def symplectic_euler(f, X, t, h):
     ``w h < 2`` and the energy error stays bounded (it oscillates, it does not
     drift) over arbitrarily long runs [2]_.
     """
-    X = np.asarray(X, dtype=float)
-    h = positive_number(h, "h", "seconds")
+    X, h = _arguments(X, t, h)
     x, v = _split(X)
     a = _evaluate(f, X, t)[:, 1]
     X_new = np.empty_like(X)
@@ -236,8 +246,7 @@ def verlet(f, X, t, h):
     position-only forces ``v*`` is never used and the method is the classical
     velocity Verlet.
     """
-    X = np.asarray(X, dtype=float)
-    h = positive_number(h, "h", "seconds")
+    X, h = _arguments(X, t, h)
     x, v = _split(X)
     a = _evaluate(f, X, t)[:, 1]
     v_half = v + 0.5 * h * a
@@ -319,8 +328,11 @@ def implicit_euler(f, X, t, h, jac=None, tol=1e-10, max_iter=50):
     oscillator each step multiplies the amplitude by ``1 / sqrt(1 + (w h)**2)``.
     For a linear ``f`` with an exact `jac`, one Newton iteration solves the step.
     """
-    X = np.asarray(X, dtype=float)
-    h = positive_number(h, "h", "seconds")
+    X, h = _arguments(X, t, h)
+    tol = nonnegative_number(tol, "tol")
+    max_iter = count(max_iter, "max_iter", least=1)
+    if jac is not None and not callable(jac):
+        raise ValueError(f"jac must be a function jac(X, t) returning df/dX, got {type(jac).__name__}")
     t_new = t + h
     Y = X.copy()
     dY = np.full(X.size, np.inf)
@@ -348,12 +360,20 @@ def _newton_update(f, Y, t, h, fY, G, jac):
     N = Y.size
     if jac is not None:
         J = jac(Y, t)
+        if not scipy.sparse.issparse(J):
+            try:
+                J = np.asarray(J, dtype=float)  # a nested list, a matrix...
+            except (TypeError, ValueError):
+                raise ValueError(
+                    f"jac(X, t) must return a ({N}, {N}) array of real numbers or a scipy.sparse "
+                    f"matrix, got {type(J).__name__}"
+                ) from None
         if J.shape != (N, N):
             raise ValueError(f"jac(X, t) must return a ({N}, {N}) matrix, got shape {J.shape}")
         if scipy.sparse.issparse(J):
             A = scipy.sparse.identity(N, format="csc") - h * J.tocsc()
             return scipy.sparse.linalg.spsolve(A, -G)
-        return np.linalg.solve(np.eye(N) - h * np.asarray(J, dtype=float), -G)
+        return np.linalg.solve(np.eye(N) - h * J, -G)
     if N <= _DENSE_FD_MAX:
         J = _dense_jacobian(f, Y, t, fY)
         return np.linalg.solve(np.eye(N) - h * J, -G)
@@ -396,10 +416,32 @@ def step_times(t0, t1, h):
 
     A last step shorter than ``1e-9 h`` is merged into the one before, so that
     ``(t1 - t0) / h`` equal to an integer up to round-off gives equal steps.
+
+    Parameters
+    ----------
+    t0, t1 : float
+        Start and end times, in seconds, finite, ``t1 >= t0``.
+    h : float
+        Time step, in seconds, > 0.
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        The times, in seconds: ``K - 1`` steps, ``K = 1`` (only `t0`) when
+        ``t1 == t0``. All steps but the last are exactly `h`.
+
+    Raises
+    ------
+    ValueError
+        When a time is not a finite real number, ``t1 < t0`` or ``h <= 0``.
+
+    Examples
+    --------
+    >>> step_times(0.0, 0.25, 0.1).tolist()
+    [0.0, 0.1, 0.2, 0.25]
     """
-    t0, t1 = float(t0), float(t1)
-    if not (np.isfinite(t0) and np.isfinite(t1)):
-        raise ValueError(f"t0 and t1 must be finite, got t0={t0!r}, t1={t1!r}")
+    t0 = finite_real(t0, "t0", "seconds")
+    t1 = finite_real(t1, "t1", "seconds")
     if t1 < t0:
         raise ValueError(f"t1 must be >= t0, got t0={t0!r}, t1={t1!r}")
     h = positive_number(h, "h", "seconds")
@@ -410,7 +452,38 @@ def step_times(t0, t1, h):
 
 
 BLOWUP_FACTOR = 1e12
-"""integrate() stops when max|X| exceeds this factor times (1 + max|X0|)."""
+"""Default growth rule of integrate(): stop when max|X| exceeds this factor times (1 + max|X0|)."""
+
+
+def _blowup_factor(blowup):
+    """The `blowup` option of integrate(): None, or a factor > 1."""
+    if blowup is None:
+        return None
+    blowup = positive_number(blowup, "blowup")
+    if blowup <= 1.0:
+        raise ValueError(f"blowup must be None or a growth factor > 1, got {blowup!r}")
+    return blowup
+
+
+def _diverged(k, times, h, step, X_start, size, factor):
+    """SimulationDiverged for step k, saying whether the state overflowed or grew too much."""
+    method = _name_of(step)
+    err = SimulationDiverged(k, times[k - 1], float(h), method)
+    if not np.isfinite(size):
+        err.args = (str(err) + " (The state became inf or NaN.)",)
+        return err
+    start = float(np.max(np.abs(X_start), initial=0.0))
+    grown = size / (1.0 + start)
+    err.args = (
+        f"the simulation diverged at step {k} (t = {times[k - 1]:.6g} s): the state is still "
+        f"finite but grew too much: its largest entry went from {start:.3g} to {size:.3g}, "
+        f"{grown:.3g} times 1 + max|X0|, beyond the growth limit blowup = {factor:.3g}. Either "
+        f"h = {float(h):.6g} s is above the stability limit of {method!r} for this system "
+        "(reduce h, add damping, or use an implicit method), or the true solution grows this "
+        "much (e.g. exponential growth): then pass blowup=None (stop only on inf or NaN) or a "
+        "larger factor.",
+    )
+    return err
 
 
 def _empty_frames(K, X):
@@ -424,7 +497,7 @@ def _empty_frames(K, X):
     return np.empty((K,) + X.shape)
 
 
-def integrate(f, X0, t0, t1, h, method="rk4", every=1, **options):
+def integrate(f, X0, t0, t1, h, method="rk4", every=1, blowup=BLOWUP_FACTOR, **options):
     """Integrate dX/dt = f(X, t) from `t0` to `t1` with fixed steps of size `h`.
 
     Parameters
@@ -441,6 +514,12 @@ def integrate(f, X0, t0, t1, h, method="rk4", every=1, **options):
         A key of :data:`INTEGRATORS` or a stepper ``step(f, X, t, h)``.
     every : int
         Record every `every`-th state (the first and last are always recorded).
+    blowup : float or None
+        Growth rule of the divergence guard: stop when ``max|X|`` exceeds
+        ``blowup * (1 + max|X0|)``, which catches an instability before it
+        overflows. Default :data:`BLOWUP_FACTOR` (``1e12``). A solution that
+        truly grows that much (``x' = x`` over 30 s grows ``e^30 ~ 1e13``-fold)
+        needs a larger factor, or ``None``: stop only on inf or NaN.
     **options
         Passed to the stepper (e.g. ``jac=`` for ``"implicit_euler"``).
 
@@ -454,9 +533,9 @@ def integrate(f, X0, t0, t1, h, method="rk4", every=1, **options):
     Raises
     ------
     SimulationDiverged
-        When the state becomes inf or NaN, or grows beyond
-        :data:`BLOWUP_FACTOR` times ``1 + max|X0|`` (an instability caught
-        before it overflows), naming the step and the time.
+        When the state becomes inf or NaN, or (unless ``blowup=None``) grows
+        beyond ``blowup`` times ``1 + max|X0|``, naming the step, the time and
+        which of the two happened (with the growth factor reached).
 
     Examples
     --------
@@ -464,10 +543,17 @@ def integrate(f, X0, t0, t1, h, method="rk4", every=1, **options):
     >>> t, X = integrate(lambda X, t: -X, [1.0], 0.0, 1.0, 0.01)
     >>> bool(abs(X[-1, 0] - np.exp(-1.0)) < 1e-9)
     True
+
+    Exponential growth is not an instability; the growth rule must be lifted:
+
+    >>> t, X = integrate(lambda X, t: X, [1.0], 0.0, 30.0, 0.01, blowup=None)
+    >>> bool(abs(X[-1, 0] / np.exp(30.0) - 1) < 1e-8)
+    True
     """
     step = method_name(method, INTEGRATORS)
     X = as_float_array(X0, "X0")
     times = step_times(t0, t1, h)
+    factor = _blowup_factor(blowup)
     if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
         raise ValueError(f"every must be a positive integer, got {every!r}")
     if getattr(step, "second_order_layout", False):
@@ -478,17 +564,15 @@ def integrate(f, X0, t0, t1, h, method="rk4", every=1, **options):
     out = _empty_frames(len(keep), X)
     out[0] = X
     slot = 1
-    # a state that grows a trillion-fold has blown up, even before it overflows
-    blowup = BLOWUP_FACTOR * (1.0 + np.max(np.abs(X), initial=0.0))
+    X_start = X
+    # a state that grows (by default) a trillion-fold has blown up, even before it overflows
+    limit = np.inf if factor is None else factor * (1.0 + np.max(np.abs(X), initial=0.0))
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         for k in range(1, len(times)):
             X = step(f, X, times[k - 1], times[k] - times[k - 1], **options)
             size = np.max(np.abs(X), initial=0.0)
-            if not size <= blowup:  # also true for inf and NaN
-                detail = ""
-                if np.isfinite(size):
-                    detail = f"(Its largest entry reached {size:.3g}, over {BLOWUP_FACTOR:.0e} times its start.)"
-                raise SimulationDiverged(k, times[k - 1], float(h), _name_of(step), detail)
+            if not size <= limit or size == np.inf:  # "not <=" is also true for NaN
+                raise _diverged(k, times, h, step, X_start, size, factor)
             if slot < len(keep) and keep[slot] == k:
                 out[slot] = X
                 slot += 1

@@ -341,3 +341,177 @@ def test_second_order_steppers_reject_flat_states(method):
     """Symplectic steppers need the (n, 2, d) layout and say so."""
     with pytest.raises(ValueError, match=r"second-order layout \(n, 2, d\)"):
         integrate(lambda X, t: -X, np.ones(3), 0.0, 1.0, 0.1, method=method)
+
+
+def _oscillator_state():
+    """One unit oscillator in the (n, 2, d) layout every stepper accepts."""
+    return oscillator_f(np.array([1.0])), np.array([[[1.0], [0.0]]])
+
+
+@pytest.mark.parametrize("method", ALL)
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        (dict(X=np.full((1, 2, 1), np.nan)), "X must be finite"),
+        (dict(X=np.array([[[np.inf], [0.0]]])), "X must be finite"),
+        (dict(X="abc"), "X must be an array of real numbers, got str"),
+        (dict(t=np.nan), r"t must be a finite real number \(in seconds\), got nan"),
+        (dict(t=np.inf), "t must be a finite real number"),
+        (dict(t="a"), "t must be a finite real number .*got 'a'"),
+        (dict(t=None), "t must be a finite real number"),
+        (dict(h=0.0), "h must be a positive finite number"),
+        (dict(h=np.nan), "h must be a positive finite number"),
+        (dict(h="0.1"), "h must be a positive finite number"),
+    ],
+)
+def test_direct_stepper_calls_reject_bad_arguments(method, bad, match):
+    """A stepper called directly refuses non-finite or non-numeric X, t, h, naming the argument."""
+    f, X = _oscillator_state()
+    args = dict(X=X, t=0.0, h=0.1)
+    args.update(bad)
+    with pytest.raises(ValueError, match=match):
+        INTEGRATORS[method](f, args["X"], args["t"], args["h"])
+
+
+@pytest.mark.parametrize("method", ALL)
+def test_steppers_accept_every_real_time_and_pass_it_unchanged(method):
+    """t may be an int, a NumPy scalar or a 0-d array: same result, and f sees the t given."""
+    f, X = _oscillator_state()
+    seen = []
+
+    def spy(X, t):
+        seen.append(t)
+        return f(X, t)
+
+    step = INTEGRATORS[method]
+    reference = step(f, X, 0.0, 0.1)
+    for t in (0, np.int64(0), np.float32(0.0), np.array(0.0)):
+        seen.clear()
+        np.testing.assert_array_equal(step(spy, X, t, 0.1), reference)
+        if step.explicit:  # explicit steppers evaluate f at t first; implicit Euler only at t + h
+            assert seen[0] is t
+        else:
+            assert seen[0] == 0.1
+
+
+def test_stepper_on_float32_and_list_input_unchanged():
+    """Valid non-float64 states are converted as before (float64 result, same values)."""
+    out = euler(lambda X, t: -X, np.array([1.0, 2.0], dtype=np.float32), 0.0, 0.5)
+    assert out.dtype == np.float64 and out.tolist() == [0.5, 1.0]
+    assert euler(lambda X, t: -X, [1.0], 0, 0.1).tolist() == [0.9]
+
+
+def test_implicit_euler_accepts_a_jacobian_given_as_a_list():
+    """A jac returning a nested list is converted (it used to raise AttributeError)."""
+    f = lambda X, t: np.array([-2.0 * X[0], -3.0 * X[1]])  # noqa: E731
+    jac = lambda X, t: [[-2.0, 0.0], [0.0, -3.0]]  # noqa: E731
+    Y = implicit_euler(f, np.array([1.0, 1.0]), 0.0, 0.5, jac=jac)
+    np.testing.assert_allclose(Y, [1.0 / 2.0, 1.0 / 2.5], rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "options, match",
+    [
+        (dict(tol=-1e-3), "tol must be a finite number >= 0"),
+        (dict(tol=np.nan), "tol must be a finite number >= 0"),
+        (dict(max_iter=0), "max_iter must be an integer >= 1"),
+        (dict(max_iter=2.5), "max_iter must be an integer >= 1"),
+        (dict(jac="dense"), "jac must be a function"),
+        (dict(jac=lambda X, t: [["a"]]), r"jac\(X, t\) must return a \(1, 1\) array of real numbers"),
+    ],
+)
+def test_implicit_euler_bad_options(options, match):
+    """Newton's tolerance, iteration cap and Jacobian are checked, naming the option."""
+    with pytest.raises(ValueError, match=match):
+        implicit_euler(lambda X, t: -X, np.array([1.0]), 0.0, 0.1, **options)
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(t0="a"), "t0 must be a finite real number"),
+        (dict(t1="b"), "t1 must be a finite real number"),
+        (dict(t0=np.nan), "t0 must be a finite real number"),
+        (dict(t1=np.inf), "t1 must be a finite real number"),
+        (dict(blowup=1.0), "blowup must be None or a growth factor > 1"),
+        (dict(blowup="big"), "blowup must be a positive finite number"),
+    ],
+)
+def test_integrate_bad_times_and_blowup(kwargs, match):
+    """Times that are not finite numbers and a growth factor <= 1 are reported by name."""
+    args = dict(f=lambda X, t: -X, X0=[1.0], t0=0.0, t1=1.0, h=0.1)
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=match):
+        integrate(**args)
+
+
+def test_exponential_growth_is_not_divergence_with_blowup_none():
+    """x' = x over 30 s (e^30 ~ 1e13-fold) runs to the accurate answer with blowup=None."""
+    t, X = integrate(lambda X, t: X, [1.0], 0.0, 30.0, 0.01, blowup=None)
+    assert X[-1, 0] == pytest.approx(np.exp(30.0), rel=1e-8)
+    t, X = integrate(lambda X, t: X, [1.0], 0.0, 30.0, 0.01, blowup=1e15)
+    assert X[-1, 0] == pytest.approx(np.exp(30.0), rel=1e-8)
+
+
+def test_growth_rule_message_says_growth_and_how_to_lift_it():
+    """The default growth rule still stops e^30, and says it was growth (by how much), not inf/NaN."""
+    with pytest.raises(SimulationDiverged) as info:
+        integrate(lambda X, t: X, [1.0], 0.0, 30.0, 0.01)
+    err, message = info.value, str(info.value)
+    assert err.step == 2833 and err.t == pytest.approx(28.32)
+    assert "still finite but grew too much" in message and "from 1 to 2.01e+12" in message
+    assert "blowup = 1e+12" in message and "blowup=None" in message
+    assert "inf or NaN" in message  # only in the advice "stop only on inf or NaN"
+    assert "became inf or NaN" not in message
+
+
+def test_overflow_message_says_inf_or_nan():
+    """With blowup=None a real blow-up still raises, and the message says the state overflowed."""
+    f = oscillator_f(np.array([100.0]))
+    with pytest.raises(SimulationDiverged, match=r"stability limit .*The state became inf or NaN") as info:
+        integrate(f, [[[1.0], [0.0]]], 0.0, 100.0, 0.05, method="euler", blowup=None)
+    assert "grew too much" not in str(info.value)
+    # 5.1-fold per step: the default rule stops ~400 steps before the overflow
+    with pytest.raises(SimulationDiverged) as early:
+        integrate(f, [[[1.0], [0.0]]], 0.0, 100.0, 0.05, method="euler")
+    assert early.value.step < info.value.step - 300
+
+
+def test_step_times_names_its_arguments():
+    """step_times checks t0, t1 and h by name and lands on t1."""
+    from particles.integrators import step_times
+
+    assert step_times(0, 0.25, 0.1).tolist() == [0.0, 0.1, 0.2, 0.25]
+    assert step_times(np.float32(1.0), np.array(1.0), 0.1).tolist() == [1.0]
+    with pytest.raises(ValueError, match="t0 must be a finite real number"):
+        step_times("0", 1.0, 0.1)
+
+
+def test_convergence_plot_lines_are_distinguishable_and_h_axis_labelled():
+    """Every method has its own marker and line style; the h axis labels every step size."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from particles.studies import convergence_study, plot_convergence
+
+    study = convergence_study("harmonic_oscillator", n_steps=[16, 32, 64, 128])
+    fig = plot_convergence(study)
+    try:
+        ax = fig.axes[0]
+        fig.canvas.draw()
+        lines = ax.get_lines()
+        assert len(lines) == len(ALL)
+        looks = {(ln.get_marker(), str(ln.get_linestyle()), ln.get_markersize(), ln.get_fillstyle()) for ln in lines}
+        assert len(looks) == len(lines)
+        by_name = {ln.get_label().split()[0]: ln for ln in lines}
+        for a, b in [("midpoint", "trapezoid"), ("euler", "implicit_euler")]:
+            la, lb = by_name[a], by_name[b]
+            assert la.get_marker() != lb.get_marker() and la.get_linestyle() != lb.get_linestyle()
+            assert la.get_markersize() < lb.get_markersize() and lb.get_fillstyle() == "none"
+        labels = [t.get_text() for t in ax.get_xticklabels() if t.get_text()]
+        assert len(labels) == 4
+        np.testing.assert_allclose(sorted(float(s) for s in labels), np.sort(study["h"]), rtol=1e-2)
+    finally:
+        plt.close(fig)

@@ -102,8 +102,37 @@ def format_table(study):
     return "\n".join(lines)
 
 
+# One look per stepper. Pairs that give (nearly) the same errors -- midpoint and
+# trapezoid are identical on linear problems, implicit and explicit Euler differ
+# little -- get a small filled marker on a solid line against a large open
+# marker on a dashed line, so that neither hides the other.
+_STYLES = {
+    "euler": dict(marker="o", linestyle="-", markersize=4),
+    "implicit_euler": dict(marker="s", linestyle="--", markersize=9, fillstyle="none"),
+    "midpoint": dict(marker="^", linestyle="-", markersize=4),
+    "trapezoid": dict(marker="D", linestyle="--", markersize=9, fillstyle="none"),
+    "rk4": dict(marker="v", linestyle="-.", markersize=6),
+    "symplectic_euler": dict(marker="x", linestyle=":", markersize=8),
+    "verlet": dict(marker="P", linestyle=(0, (5, 1, 1, 1)), markersize=7),
+}
+_FALLBACK_MARKERS = ["*", "h", "<", ">", "p", "X"]
+_FALLBACK_LINES = ["-", "--", "-.", ":"]
+
+
+def _style(method, k):
+    """Marker and line style of `method`, the k-th line of the plot."""
+    if method in _STYLES:
+        return dict(_STYLES[method])
+    return dict(marker=_FALLBACK_MARKERS[k % len(_FALLBACK_MARKERS)],
+                linestyle=_FALLBACK_LINES[k % len(_FALLBACK_LINES)], markersize=7)
+
+
 def plot_convergence(study, ax=None):
     """Log-log plot of global error against step size, one line per method.
+
+    Every method gets its own marker and line style, so that methods with
+    (nearly) equal errors stay visible on top of each other; the step-size
+    axis is labelled at each step size of the study.
 
     Parameters
     ----------
@@ -116,14 +145,18 @@ def plot_convergence(study, ax=None):
     matplotlib.figure.Figure
     """
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter, NullLocator
 
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 4.5))
-    from matplotlib.ticker import NullFormatter
 
-    h = study["h"]
-    for m, e in study["error"].items():
-        ax.loglog(h, e, "o-", label=f"{m} (slope {study['order'][m]:.2f})")
+    h = np.asarray(study["h"], dtype=float)
+    for k, (m, e) in enumerate(study["error"].items()):
+        ax.loglog(h, e, label=f"{m} (slope {study['order'][m]:.2f})", **_style(m, k))
+    # a study spans about one decade of h: one labelled tick per step size
+    ax.xaxis.set_major_locator(FixedLocator(np.sort(h)))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:.3g}"))
+    ax.xaxis.set_minor_locator(NullLocator())
     ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("time step h (s)")
     ax.set_ylabel("global error at t1")
