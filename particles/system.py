@@ -20,8 +20,8 @@ References
 
 import numpy as np
 
-from ._checks import as_float_array, method_name, positive_number
-from .integrators import INTEGRATORS, integrate
+from ._checks import as_float_array, finite_real, method_name, positive_number
+from .integrators import BLOWUP_FACTOR, INTEGRATORS, integrate
 
 __all__ = ["ParticleSystem"]
 
@@ -37,15 +37,15 @@ class ParticleSystem:
         Initial velocities, in m/s (default zero).
     m : float or array_like, shape (n,)
         Masses, in kg, all > 0. A number gives every particle that mass.
-    forces : sequence of Force
+    forces : sequence of Force, or one Force
         Force objects (see :mod:`particles.forces`); each adds its part into
-        the total force array.
+        the total force array. A single force may be given without a list.
     pinned : array_like of int or bool, optional
         Indices (or a boolean mask of length n) of particles held in place:
         their net force is ignored and their derivative is zero. Their
         velocity must be zero.
     t : float
-        Initial time, in seconds.
+        Initial time, in seconds, finite.
 
     Attributes
     ----------
@@ -93,7 +93,7 @@ class ParticleSystem:
         if np.any(m <= 0):
             raise ValueError("m must be positive: every mass must be > 0 kg")
         self.m = m
-        self.forces = list(forces)
+        self.forces = _force_list(forces)
         for force in self.forces:
             if not callable(getattr(force, "add_to", None)):
                 raise ValueError(
@@ -104,7 +104,7 @@ class ParticleSystem:
         if np.any(v[self.pinned] != 0):
             raise ValueError("v of pinned particles must be zero: a pinned particle does not move")
         self.X = np.asfortranarray(np.stack([x, v], axis=1))
-        self.t = float(t)
+        self.t = finite_real(t, "t", "seconds")
         self.attributes = {}
         self._fill = {}
 
@@ -333,12 +333,36 @@ class ParticleSystem:
         return -self.total_force(X, t)[self.pinned]
 
     def kinetic_energy(self, X=None):
-        """Total kinetic energy ``sum(m v**2) / 2``, in joules."""
+        """Total kinetic energy ``sum(m v**2) / 2``, in joules.
+
+        Parameters
+        ----------
+        X : ndarray, shape (n, 2, d), optional
+            State: positions (m) and velocities (m/s); default the current one.
+
+        Returns
+        -------
+        float
+            Kinetic energy, in joules. Pinned particles have zero velocity and
+            add nothing.
+        """
         X = self.X if X is None else self._check_state(X)
         return 0.5 * float(np.sum(self.m * np.sum(X[:, 1] ** 2, axis=1)))
 
     def momentum(self, X=None):
-        """Total linear momentum ``sum(m v)``, shape (d,), in kg m/s."""
+        """Total linear momentum ``sum(m v)``.
+
+        Parameters
+        ----------
+        X : ndarray, shape (n, 2, d), optional
+            State: positions (m) and velocities (m/s); default the current one.
+
+        Returns
+        -------
+        ndarray, shape (d,)
+            Momentum, in kg m/s. Internal pair forces conserve it; gravity,
+            damping and pins change it.
+        """
         X = self.X if X is None else self._check_state(X)
         return self.m @ X[:, 1]
 
@@ -346,6 +370,20 @@ class ParticleSystem:
         """Sum of the potential energies of the conservative forces, in joules.
 
         Forces without a ``potential_energy`` method (damping, wind) are skipped.
+
+        Parameters
+        ----------
+        X : ndarray, shape (n, 2, d), optional
+            State (only the positions ``X[:, 0]``, in metres, matter); default
+            the current one.
+        t : float, optional
+            Time, in seconds, for time-dependent fields (default: the current one).
+
+        Returns
+        -------
+        float
+            Potential energy, in joules, relative to each force's own zero
+            (e.g. ``y = 0`` for gravity, infinite separation for N-body gravity).
         """
         X = self.X if X is None else self._check_state(X)
         t = self.t if t is None else t
@@ -357,15 +395,38 @@ class ParticleSystem:
             )
         )
 
-    def step(self, h, method="rk4", **options):
-        """Advance the state by one step of `h` seconds; returns the new state."""
+    def step(self, h, method="rk4", blowup=BLOWUP_FACTOR, **options):
+        """Advance the state by one step of `h` seconds.
+
+        Parameters
+        ----------
+        h : float
+            Time step, in seconds, > 0.
+        method : str or callable
+            A key of :data:`particles.integrators.INTEGRATORS` or a stepper.
+        blowup : float or None
+            Growth rule of the divergence guard, as in :meth:`run`.
+        **options
+            Passed to the stepper.
+
+        Returns
+        -------
+        ndarray, shape (n, 2, d)
+            A copy of the new state: positions (m) and velocities (m/s). The
+            system's :attr:`X` and :attr:`t` (now ``t + h``) are updated.
+
+        Raises
+        ------
+        SimulationDiverged
+            As :meth:`run`; the system is then left as it was.
+        """
         step = method_name(method, INTEGRATORS)
         h = positive_number(h, "h", "seconds")
-        _, X = integrate(self.derivative, self.X, self.t, self.t + h, h, method=step, **options)
+        _, X = integrate(self.derivative, self.X, self.t, self.t + h, h, method=step, blowup=blowup, **options)
         self.X, self.t = np.array(X[-1], order="F"), self.t + h
         return self.state()
 
-    def run(self, t_end, h, method="rk4", every=1, **options):
+    def run(self, t_end, h, method="rk4", every=1, blowup=BLOWUP_FACTOR, **options):
         """Simulate from the current time to `t_end` and record the states.
 
         Parameters
@@ -378,25 +439,56 @@ class ParticleSystem:
             A key of :data:`particles.integrators.INTEGRATORS` or a stepper.
         every : int
             Record every `every`-th step (first and last always recorded).
+        blowup : float or None
+            Growth rule of the divergence guard: the run stops when the largest
+            entry of the state exceeds ``blowup * (1 + max|X|)`` of the start
+            state, which catches an instability long before it overflows.
+            Default :data:`particles.integrators.BLOWUP_FACTOR` (``1e12``):
+            no particle motion worth animating grows that much. ``None``: stop
+            only on inf or NaN.
         **options
             Passed to the stepper.
 
         Returns
         -------
         t : ndarray, shape (K,)
+            Recorded times, in seconds, from the current time to `t_end`.
         X : ndarray, shape (K, n, 2, d)
+            States at those times: positions (m) and velocities (m/s).
 
         Raises
         ------
         SimulationDiverged
-            When the state becomes non-finite; the system is then left as it
-            was before the call.
+            When the state becomes inf or NaN, or grows beyond the `blowup`
+            rule; the message says which, at which step and time. The system
+            is then left as it was before the call.
+        ValueError
+            When ``t_end`` is not a finite number at least the current time.
         """
+        t_end = finite_real(t_end, "t_end", "seconds")
+        if t_end < self.t:
+            raise ValueError(
+                f"t_end must be >= the current time t = {self.t!r} s of the system, got {t_end!r}"
+            )
         t, X = integrate(
-            self.derivative, self.X, self.t, t_end, h, method=method, every=every, **options
+            self.derivative, self.X, self.t, t_end, h, method=method, every=every, blowup=blowup, **options
         )
         self.X, self.t = np.array(X[-1], order="F"), float(t[-1])
         return t, X
+
+
+def _force_list(forces):
+    """The forces as a list: one Force object alone is accepted too."""
+    if callable(getattr(forces, "add_to", None)):
+        return [forces]
+    if isinstance(forces, (str, bytes)):
+        raise ValueError(f"forces must be a list of Force objects, got the string {forces!r}")
+    try:
+        return list(forces)
+    except TypeError:
+        raise ValueError(
+            f"forces must be a list of Force objects (or one Force), got {type(forces).__name__}"
+        ) from None
 
 
 def _pinned_indices(pinned, n):

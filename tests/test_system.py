@@ -221,3 +221,64 @@ def test_bad_population_changes(call, match):
     ps = ParticleSystem([[0.0, 0.0]])
     with pytest.raises(ValueError, match=match):
         call(ps)
+
+
+def test_run_to_an_earlier_time_names_t_end():
+    """run(t_end) before the current time says t_end (not integrate's t1) and the current t."""
+    ps = ParticleSystem([[0.0, 0.0]], t=2.0)
+    with pytest.raises(ValueError, match=r"t_end must be >= the current time t = 2.0 s of the system, got 1.0"):
+        ps.run(1.0, 0.1)
+    for bad in ("later", np.nan, np.inf, None):
+        with pytest.raises(ValueError, match="t_end must be a finite real number"):
+            ps.run(bad, 0.1)
+    assert ps.t == 2.0
+
+
+@pytest.mark.parametrize("t", [np.nan, np.inf, "a", None, [0.0]])
+def test_initial_time_must_be_a_finite_number(t):
+    """ParticleSystem(t=...) refuses NaN, inf and non-numbers, naming t."""
+    with pytest.raises(ValueError, match="t must be a finite real number"):
+        ParticleSystem([[0.0, 0.0]], t=t)
+
+
+def test_initial_time_accepts_numpy_scalars():
+    """A NumPy time (as from a time array) is accepted and stored as a float."""
+    ps = ParticleSystem([[0.0, 0.0]], t=np.float32(0.5))
+    assert ps.t == 0.5 and type(ps.t) is float
+
+
+def test_a_single_force_needs_no_list():
+    """forces=Gravity(g) works like forces=[Gravity(g)]; a non-list non-force is a ValueError."""
+    one = ParticleSystem([[0.0, 1.0]], forces=Gravity(g))
+    listed = ParticleSystem([[0.0, 1.0]], forces=[Gravity(g)])
+    assert len(one.forces) == 1
+    np.testing.assert_array_equal(one.run(1.0, 0.1)[1], listed.run(1.0, 0.1)[1])
+    with pytest.raises(ValueError, match="forces must be a list of Force objects .*got int"):
+        ParticleSystem([[0.0, 0.0]], forces=3)
+    with pytest.raises(ValueError, match="forces must be a list of Force objects, got the string 'gravity'"):
+        ParticleSystem([[0.0, 0.0]], forces="gravity")
+
+
+def test_run_blowup_option_lets_true_growth_through():
+    """x'' = x grows like cosh t: over 30 s the default rule stops it, blowup=None gives cosh(30)."""
+    repel = Field(lambda x, t: x)
+    ps = ParticleSystem([[1.0, 0.0]], forces=[repel])
+    with pytest.raises(SimulationDiverged, match=r"grew too much.*blowup=None"):
+        ps.run(30.0, 0.01)
+    assert ps.t == 0.0
+    t, X = ps.run(30.0, 0.01, blowup=None)
+    assert X[-1, 0, 0, 0] == pytest.approx(np.cosh(30.0), rel=1e-7)
+    assert ps.t == 30.0
+    step = ParticleSystem([[1.0, 0.0]], forces=[repel]).step(0.1, blowup=None)
+    assert step[0, 0, 0] == pytest.approx(np.cosh(0.1), rel=1e-8)
+
+
+def test_energy_and_momentum_of_a_given_state():
+    """kinetic_energy, momentum and potential_energy use the state passed, else the current one."""
+    ps = ParticleSystem([[0.0, 2.0], [1.0, 0.0]], v=[[3.0, 0.0], [0.0, -1.0]], m=[2.0, 1.0], forces=[Gravity(g)])
+    assert ps.kinetic_energy() == pytest.approx(0.5 * 2.0 * 9.0 + 0.5 * 1.0)
+    np.testing.assert_allclose(ps.momentum(), [6.0, -1.0])
+    assert ps.potential_energy() == pytest.approx(2.0 * 9.81 * 2.0)
+    X = np.zeros((2, 2, 2))
+    assert ps.kinetic_energy(X) == 0.0 and ps.potential_energy(X) == 0.0
+    np.testing.assert_array_equal(ps.momentum(X), [0.0, 0.0])
