@@ -29,7 +29,7 @@ References
 
 import numpy as np
 
-from ._checks import as_float_array, nonnegative_number, positive_number
+from ._checks import as_float_array, finite_real, nonnegative_number, positive_number
 from .neighbors import VerletList, cell_pairs
 
 __all__ = [
@@ -55,10 +55,33 @@ class Force:
         raise NotImplementedError
 
     def __call__(self, x, v=None, t=0.0, m=1.0):
-        """This force alone, shape (n, d), for positions `x` and velocities `v`."""
+        """This force alone, for positions `x` and velocities `v`.
+
+        Parameters
+        ----------
+        x : array_like, shape (n, d)
+            Positions, in metres.
+        v : array_like, shape (n, d), optional
+            Velocities, in m/s (default zero).
+        t : float
+            Time, in seconds.
+        m : float or array_like, shape (n,)
+            Masses, in kg, > 0.
+
+        Returns
+        -------
+        ndarray, shape (n, d)
+            The force on each particle, in newtons.
+        """
         x = as_float_array(x, "x", ndim=2)
         v = np.zeros_like(x) if v is None else as_float_array(v, "v", shape=x.shape)
-        m = np.broadcast_to(as_float_array(m, "m", ndim=(0, 1)), (len(x),))
+        m = as_float_array(m, "m", ndim=(0, 1))
+        if m.ndim == 1 and m.shape != (len(x),):
+            raise ValueError(f"m must be a number or have shape ({len(x)},), got shape {m.shape}")
+        if np.any(m <= 0):
+            raise ValueError("m must be positive: every mass must be > 0 kg")
+        m = np.broadcast_to(m, (len(x),))
+        t = finite_real(t, "t", "seconds")
         F = np.zeros_like(x)
         self.add_to(F, x, v, t, m)
         return F
@@ -304,6 +327,27 @@ def pair_differences(x, i, j):
 
     One row per axis: gathering from the contiguous columns of ``x`` is
     several times faster than fancy-indexing rows of an (n, d) array.
+
+    Parameters
+    ----------
+    x : ndarray, shape (n, d)
+        Positions, in metres.
+    i, j : ndarray of int, shape (p,)
+        The two particles of each pair, valid indices into `x` (not checked:
+        this runs inside every force evaluation).
+
+    Returns
+    -------
+    ndarray, shape (d, p)
+        Column ``k`` is ``x[i[k]] - x[j[k]]``, in metres (the transpose of
+        ``x[i] - x[j]``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> pair_differences(np.array([[0.0, 0.0], [1.0, 2.0]]), np.array([1]), np.array([0]))
+    array([[1.],
+           [2.]])
     """
     xt = np.ascontiguousarray(x.T)
     d = np.empty((xt.shape[0], len(i)))
@@ -450,7 +494,29 @@ class LennardJones(Force):
 
         Its force is ``48 eps sigma^12 / r^13 - 24 eps sigma^6 / r^7``, i.e.
         ``k1 = 48 eps sigma^12``, ``m = 13``, ``k2 = 24 eps sigma^6``, ``n = 7``.
-        The default cutoff is ``2.5 sigma``.
+
+        Parameters
+        ----------
+        epsilon : float
+            Depth of the potential well, in joules, > 0 (``U(r_min) = -epsilon``).
+        sigma : float
+            Distance where the potential crosses zero, in metres, > 0; the
+            force vanishes at ``r_min = 2^(1/6) sigma ~ 1.12 sigma``.
+        cutoff : float, optional
+            Range, in metres (default ``2.5 sigma``).
+        **options
+            Other arguments of :class:`LennardJones` (`neighbors`, `skin`,
+            `cells_per_cutoff`).
+
+        Returns
+        -------
+        LennardJones
+
+        Examples
+        --------
+        >>> lj = LennardJones.from_epsilon_sigma(epsilon=1.0, sigma=1.0)
+        >>> float(abs(lj.magnitude(2 ** (1 / 6)))) < 1e-12     # no force at the minimum
+        True
         """
         epsilon = positive_number(epsilon, "epsilon")
         sigma = positive_number(sigma, "sigma")
@@ -472,7 +538,19 @@ class LennardJones(Force):
         self._list.reset()
 
     def magnitude(self, r):
-        """``f(r) = k1 / r^m - k2 / r^n`` for distances `r` (no cutoff applied)."""
+        """``f(r) = k1 / r^m - k2 / r^n`` for distances `r` (no cutoff applied).
+
+        Parameters
+        ----------
+        r : float or array_like, any shape
+            Distances between two particles, in metres, > 0.
+
+        Returns
+        -------
+        ndarray, shape of `r`
+            Signed magnitude of the force, in newtons: positive repels,
+            negative attracts.
+        """
         r = np.asarray(r, dtype=float)
         return self.k1 / r**self.m - self.k2 / r**self.n
 
@@ -519,6 +597,17 @@ class LennardJones(Force):
 
         ``U(r) = k1 / ((m - 1) r^(m-1)) - k2 / ((n - 1) r^(n-1))`` so that
         ``f = -dU/dr``.
+
+        Parameters
+        ----------
+        r : float or array_like, any shape
+            Distances between two particles, in metres, > 0.
+
+        Returns
+        -------
+        ndarray, shape of `r`
+            Pair potential energy, in joules, shifted to be continuous (zero)
+            at the cutoff.
         """
         r = np.asarray(r, dtype=float)
 

@@ -231,6 +231,23 @@ def all_pairs(x, cutoff):
 
     Returns the same pairs as :func:`cell_pairs` (possibly in another order).
     Works in blocks of rows so that memory stays bounded.
+
+    Parameters
+    ----------
+    x : array_like, shape (n, d)
+        Positions, finite (in metres, or any unit shared with `cutoff`).
+    cutoff : float
+        Interaction range, > 0: pairs with distance strictly below it are listed.
+
+    Returns
+    -------
+    i, j : ndarray of int, shape (p,)
+        Each unordered pair with ``|x[i] - x[j]| < cutoff`` once, ``i < j``.
+
+    Examples
+    --------
+    >>> all_pairs([[0.0, 0.0], [0.5, 0.0], [3.0, 0.0]], cutoff=1.0)
+    (array([0]), array([1]))
     """
     x = as_float_array(x, "x", ndim=2)
     rc2 = positive_number(cutoff, "cutoff") ** 2
@@ -302,13 +319,38 @@ class VerletList:
         return bool(4.0 * moved2 > self.skin**2)
 
     def pairs(self, x):
-        """Candidate pairs ``(i, j)`` for positions `x`, shape (n, d).
+        """Candidate pairs ``(i, j)`` for positions `x`.
 
         Every pair closer than the cutoff is included; some listed pairs may
         be farther (up to ``cutoff + skin``).
+
+        Parameters
+        ----------
+        x : array_like, shape (n, d)
+            Current positions, in the unit of the cutoff (metres).
+
+        Returns
+        -------
+        i, j : ndarray of int, shape (p,)
+            Each candidate unordered pair once (the stored list, rebuilt
+            first if some particle has moved more than ``skin / 2``).
+
+        Notes
+        -----
+        Positions that contain inf or NaN (a simulation blowing up, seen in
+        the middle of a step) do not rebuild the list: the stored pairs are
+        returned when they fit `x`, no pairs otherwise. The force is then
+        non-finite or wrong, and the integrator's divergence check reports
+        the blow-up (:class:`particles.SimulationDiverged`) instead of the
+        grid refusing the positions.
         """
         x = np.asarray(x, dtype=float)
         if self.needs_rebuild(x):
+            if not np.isfinite(x).all():
+                if self._pairs is not None and self._x_ref is not None and self._x_ref.shape == x.shape:
+                    return self._pairs
+                empty = np.zeros(0, dtype=np.int64)
+                return empty, empty
             self._pairs = cell_pairs(x, self.cutoff + self.skin, self.cells_per_cutoff)
             self._x_ref = x.copy(order="K")
             self.builds += 1

@@ -280,3 +280,42 @@ def test_forces_do_not_modify_inputs():
     for force in [Gravity([0, 0, -1]), Damping(1.0), Wind([1, 0, 0], gust=0.3), Attractor([0, 0, 0], 1.0),
                   Vortex([0, 0, 0], 1.0), NBodyGravity(softening=0.1), LennardJones.from_epsilon_sigma()]:
         force(x, v, 0.5)
+
+
+@pytest.mark.parametrize("method", ["verlet", "rk4", "midpoint", "trapezoid", "euler"])
+@pytest.mark.parametrize("d", [2, 3])
+def test_lennard_jones_overlap_raises_simulation_diverged(method, d):
+    """Two particles 1e-25 apart: inf positions mid-step reach the divergence check (not the grid's ValueError)."""
+    from particles import SimulationDiverged
+
+    x = np.zeros((2, d))
+    x[1] = 1e-25
+    ps = ParticleSystem(x, forces=[LennardJones.from_epsilon_sigma()])
+    with np.errstate(all="ignore"):
+        with pytest.raises(SimulationDiverged, match=rf"diverged at step 1 \(t = 0 s\).*'{method}'") as info:
+            ps.run(0.1, 0.01, method=method)
+    assert info.value.step == 1 and info.value.t == 0.0
+    np.testing.assert_array_equal(ps.X[:, 0], x)  # the system is left as it was
+
+
+def test_force_call_checks_masses():
+    """force(x, m=...) refuses masses <= 0 and masses of the wrong length, naming m."""
+    x = np.zeros((2, 2))
+    for m in (-1.0, 0.0, [1.0, -2.0]):
+        with pytest.raises(ValueError, match="m must be positive"):
+            Gravity([0, -9.81])(x, m=m)
+    with pytest.raises(ValueError, match=r"m must be a number or have shape \(2,\), got shape \(3,\)"):
+        Gravity([0, -9.81])(x, m=[1.0, 2.0, 3.0])
+    with pytest.raises(ValueError, match="t must be a finite real number"):
+        Gravity([0, -9.81])(x, t=np.nan)
+    np.testing.assert_allclose(Gravity([0, -9.81])(x, m=[1.0, 2.0]), [[0, -9.81], [0, -19.62]])
+
+
+def test_lennard_jones_documented_helpers():
+    """magnitude vanishes at 2^(1/6) sigma; pair_potential is -epsilon there and 0 beyond the cutoff."""
+    lj = LennardJones.from_epsilon_sigma(epsilon=2.0, sigma=0.5)
+    r_min = 2 ** (1 / 6) * 0.5
+    assert abs(lj.magnitude(r_min)) < 1e-9 and lj.magnitude(0.9 * r_min) > 0 > lj.magnitude(1.1 * r_min)
+    shift = 4 * 2.0 * ((0.5 / 1.25) ** 12 - (0.5 / 1.25) ** 6)  # U at the default cutoff 2.5 sigma
+    assert lj.pair_potential(r_min) == pytest.approx(-2.0 - shift)
+    assert lj.pair_potential(np.array([1.25, 3.0])).tolist() == [0.0, 0.0]

@@ -110,3 +110,23 @@ def test_verlet_list_rebuilds_only_when_needed():
     vl.reset()
     vl.pairs(y[:-1])
     assert vl.builds == 4
+
+
+def test_verlet_list_does_not_rebuild_on_non_finite_positions():
+    """inf/NaN positions (a blow-up mid-step) return the stored pairs, or none, instead of raising."""
+    x = np.array([[0.0, 0.0], [0.5, 0.0], [3.0, 0.0]])
+    vl = VerletList(cutoff=1.0, skin=0.2)
+    assert as_set(*vl.pairs(x)) == {(0, 1)}
+    y = x.copy()
+    y[1] = np.inf
+    assert as_set(*vl.pairs(y)) == {(0, 1)} and vl.builds == 1
+    y[1] = np.nan
+    assert as_set(*vl.pairs(y)) == {(0, 1)} and vl.builds == 1
+    assert as_set(*vl.pairs(x)) == {(0, 1)} and vl.builds == 1  # the reference positions are kept
+    fresh = VerletList(cutoff=1.0, skin=0.2)
+    i, j = fresh.pairs(y)
+    assert len(i) == len(j) == 0 and fresh.builds == 0
+    i, j = vl.pairs(y[:2])  # another number of particles: the stored pairs do not fit
+    assert len(i) == 0
+    with pytest.raises(ValueError, match="x must be finite"):
+        cell_pairs(y, 1.0)  # the grid itself still refuses them
