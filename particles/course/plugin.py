@@ -220,9 +220,9 @@ def record_of(item, outcome, excinfo, seconds):
     """The JSON-ready record of one test (see :mod:`particles.course.grading`)."""
     points = item.get_closest_marker("points")
     doc = (getattr(item.obj, "__doc__", None) or item.name).strip().splitlines()[0]
-    callspec = getattr(item, "callspec", None)
-    if callspec is not None:  # one test function, several parameters: say which one
-        doc = f"{doc} [{callspec.id}]"
+    key = _test_key(item)
+    if key.endswith("]"):  # one test function, several parameters: say which one (not the batch job)
+        doc = f"{doc} [{key[key.index('[') + 1:-1]}]"
     record = {
         "test": _test_key(item),
         "name": doc,

@@ -91,3 +91,4 @@ def test_every_test_has_its_own_name(graded, exercise):
     """The names students see (feedback, Gradescope) are distinct, parametrized tests saying their case."""
     names = [t["name"] for t in _tests(graded, exercise, "master").values()]
     assert len(set(names)) == len(names), sorted(n for n in names if names.count(n) > 1)
+    assert not [n for n in names if "__job" in n], "the batch parameter leaked into a test name"
