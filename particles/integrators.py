@@ -4,8 +4,10 @@ Every stepper has the same signature::
 
     X_new = step(f, X, t, h)
 
-and never modifies ``X``. ``f(X, t)`` returns an array of the same shape as
-``X``. The generic steppers (:func:`euler`, :func:`midpoint`, :func:`trapezoid`,
+and never modifies ``X``, which must be finite (inf or NaN raise ValueError;
+:func:`integrate` turns a state that blows up into
+:class:`~particles.SimulationDiverged`). ``f(X, t)`` returns an array of the
+same shape as ``X``. The generic steppers (:func:`euler`, :func:`midpoint`, :func:`trapezoid`,
 :func:`rk4`, :func:`implicit_euler`) accept any array shape, so they work on a
 scalar ODE, on the circle field ``f = (-y, x)`` and on a particle system alike.
 :func:`symplectic_euler` and :func:`verlet` need the second-order layout
@@ -112,6 +114,13 @@ def euler(f, X, t, h):
     -------
     ndarray, shape of `X`
         State at ``t + h``.
+
+    Raises
+    ------
+    ValueError
+        When `X` is not an array of finite real numbers, `t` not a finite
+        real number, or `h` not a positive finite number. Every stepper makes
+        these checks, so that a NaN never passes silently from step to step.
 
     Notes
     -----
@@ -300,17 +309,17 @@ def implicit_euler(f, X, t, h, jac=None, tol=1e-10, max_iter=50):
         Time and time step, in seconds (``h > 0``).
     jac : callable, optional
         ``jac(X, t)`` returning the Jacobian ``df/dX`` of the flattened state,
-        shape ``(X.size, X.size)``, as a dense array or a ``scipy.sparse``
-        matrix. Without it, the Jacobian is estimated by finite differences:
+        shape ``(X.size, X.size)``, as a dense array (or nested lists) or a
+        ``scipy.sparse`` matrix. Without it, the Jacobian is estimated by finite differences:
         as a dense matrix (one evaluation of ``f`` per state component) for
         states of up to 200 numbers, and matrix-free inside GMRES for larger
         ones (one evaluation per Krylov iteration). Give `jac` for large systems.
     tol : float
-        Relative tolerance: Newton stops when the residual
+        Relative tolerance, >= 0: Newton stops when the residual
         ``Y - X - h f(Y, t + h)`` or the last update is below
         ``tol * max(max|X|, max|Y|)``.
     max_iter : int
-        Largest number of Newton iterations.
+        Largest number of Newton iterations, >= 1.
 
     Returns
     -------
@@ -320,6 +329,9 @@ def implicit_euler(f, X, t, h, jac=None, tol=1e-10, max_iter=50):
     ------
     ConvergenceError
         When Newton's method does not converge in `max_iter` iterations.
+    ValueError
+        For a non-finite `X` or `t`, ``h <= 0``, ``tol < 0``, a `max_iter`
+        that is not an integer >= 1, or a `jac` of the wrong shape.
 
     Notes
     -----
@@ -476,8 +488,8 @@ def _diverged(k, times, h, step, X_start, size, factor):
     grown = size / (1.0 + start)
     err.args = (
         f"the simulation diverged at step {k} (t = {times[k - 1]:.6g} s): the state is still "
-        f"finite but grew too much: its largest entry went from {start:.3g} to {size:.3g}, "
-        f"{grown:.3g} times 1 + max|X0|, beyond the growth limit blowup = {factor:.3g}. Either "
+        f"finite but grew too much: its largest entry went from {start:.3g} to {size:.3g} "
+        f"({grown:.3g} times 1 + max|X0|), past the growth limit blowup = {factor:.3g}. Either "
         f"h = {float(h):.6g} s is above the stability limit of {method!r} for this system "
         "(reduce h, add damping, or use an implicit method), or the true solution grows this "
         "much (e.g. exponential growth): then pass blowup=None (stop only on inf or NaN) or a "

@@ -422,7 +422,9 @@ class ParticleSystem:
         """
         step = method_name(method, INTEGRATORS)
         h = positive_number(h, "h", "seconds")
-        _, X = integrate(self.derivative, self.X, self.t, self.t + h, h, method=step, blowup=blowup, **options)
+        _, X = integrate(
+            self.derivative, self.X, self.t, self.t + h, h, method=step, blowup=blowup, **options
+        )
         self.X, self.t = np.array(X[-1], order="F"), self.t + h
         return self.state()
 
