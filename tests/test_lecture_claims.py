@@ -1,0 +1,160 @@
+"""The key numbers each lecture states are the numbers its cells print.
+
+For every lecture a small table of claims: a regular expression over the
+printed text of the executed notebook (stream output and ``text/plain``
+results, all cells concatenated) whose first group is the number, the value
+the lecture states, and a tolerance. Seeded or exact results get a tight
+tolerance; timings only loose bounds, written ``(below, above)``: the value
+must lie in ``[expected - below, expected + above]``. Where the prose states
+the number, ``prose`` is the text the lecture's markdown must contain, so that
+prose and output cannot drift apart again.
+
+The notebooks are executed once per test session by the ``executed_lecture``
+fixture (``tests/conftest.py``), shared with ``tests/test_notebooks.py`` and
+``tests/test_site.py``.
+"""
+
+import math
+import re
+from collections import namedtuple
+from pathlib import Path
+
+import nbformat
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+AT_LEAST = (0.0, math.inf)  # tolerance of a lower bound: value >= expected
+
+Claim = namedtuple("Claim", "lecture claim pattern expected tolerance prose")
+
+NUMBER = r"([-+]?\d+(?:\.\d*)?(?:e[-+]?\d+)?)"
+
+CLAIMS = [
+    # Lecture 1: measured orders, Euler's energy factor, the spiral of the animation
+    Claim("01_state_and_steppers", "Euler's measured order on the oscillator", rf"^euler\s+1\s+{NUMBER}", 1.04, 0.005, "Euler 1.04"),
+    Claim("01_state_and_steppers", "symplectic Euler's measured order", rf"^symplectic_euler\s+1\s+{NUMBER}", 1.01, 0.005, "symplectic Euler 1.01"),
+    Claim("01_state_and_steppers", "velocity Verlet's measured order", rf"^verlet\s+2\s+{NUMBER}", 2.00, 0.005, "velocity Verlet 2.00"),
+    Claim("01_state_and_steppers", "RK4's measured order", rf"^rk4\s+4\s+{NUMBER}", 4.01, 0.005, "RK4 4.01"),
+    Claim("01_state_and_steppers", "Euler multiplies the energy by 1 + (omega h)^2 per step",
+          rf"every step x{NUMBER}; \(omega h\)\^2 \+ 1 = 1\.010966", 1.010966, 5e-7, None),
+    Claim("01_state_and_steppers", "Euler's particles end at 2.5 times their radius",
+          rf"^euler\s+mean r\(t_end\) / r\(0\) = {NUMBER}", 2.548, 5e-4, "about 2.5 times"),
+    # Lecture 2: damping, momentum, the bucket grid
+    Claim("02_forces", "measured relaxation time for d = 0.1 kg/s", rf"^\s+0\.1\s+20\.000\s+{NUMBER}", 20.0, 1e-3, None),
+    Claim("02_forces", "terminal speed m g / d at d = 25 kg/s", rf"^\s+25\.0\s+\S+\s+{NUMBER}\s+0\.392", 0.392, 5e-4, "0.39 m/s"),
+    Claim("02_forces", "the sweep's fastest settling", rf"fastest settling: d = {NUMBER} kg/s", 1.41, 5e-3, "$d = 1.41$ kg/s"),
+    Claim("02_forces", "N-body momentum conserved to round-off", rf"largest momentum change: {NUMBER} kg m/s", 0.0, 1e-14, None),
+    Claim("02_forces", "mean fraction of the 3 x 3 block's candidates that are neighbours",
+          rf"whose block lies inside the box: {NUMBER}% of the candidates", 35.0, 1.0, "35% of the candidates"),
+    Claim("02_forces", "bucket grid more than 10 times faster than all pairs at N = 2000 (timing)",
+          rf"N =  2000: all pairs .* ratio\s+{NUMBER}", 10.0, AT_LEAST, None),
+    # Lecture 3: the overshooting fixes and the bowl
+    Claim("03_collisions", "projection's elastic ball climbs to 1.48 m in 20 bounces",
+          rf"project\s+eps = 1, height after 20 bounces: {NUMBER} m", 1.484, 5e-4, "1.48 m"),
+    Claim("03_collisions", "backtracking keeps the restitution ratio eps^2 = 0.64",
+          rf"^backtrack\s+0\.80\s+6\s+\S+\s+{NUMBER} to", 0.64, 5e-5, "0.6400"),
+    Claim("03_collisions", "projection gains exactly g d per bounce",
+          rf"^project\s*: 10 bounces, .* largest \|dE - g d\| = {NUMBER} J/kg", 0.0, 1e-12, None),
+    Claim("03_collisions", "projection's error halves with the step (first order)",
+          rf"^\s+0\.005\s+\S+\s+{NUMBER}", 2.0, 0.2, "ratios about 2"),
+    Claim("03_collisions", "the bowl keeps less than 1% of the mechanical energy",
+          rf"mechanical energy kept: {NUMBER}", 0.0, (0.0, 0.01), "more than 99%"),
+    # Lecture 4: emitters
+    Claim("04_emitters_and_rendering", "the slide's literal t_last = t emits 6.67/s for 10/s",
+          rf"i\.e\. {NUMBER} per second instead of 10", 6.67, 5e-3, "6.67 per second"),
+    Claim("04_emitters_and_rendering", "the carried emitter never misses a particle",
+          rf"largest \|N - floor\(rate t\)\| over all steps = {NUMBER}", 0, 0, None),
+    Claim("04_emitters_and_rendering", "worst literal rate 5.13/s", rf"worst: {NUMBER} particles/s", 5.13, 5e-3, "5.13"),
+    Claim("04_emitters_and_rendering", "staggered births 3.1 cm apart", rf"staggered: 200 particles, gaps {NUMBER} to", 0.0314, 5e-5, "3.1 cm"),
+    Claim("04_emitters_and_rendering", "the Genesis ring made floor(150 x 2) systems", rf"secondary systems made: {NUMBER}", 300, 0, None),
+    Claim("04_emitters_and_rendering", "the fountain holds about rate x mean lifetime = 200",
+          rf"alive after 1\.3 s: mean {NUMBER}", 200.0, 5.0, None),
+    # Lecture 5: flocks and crowds
+    Claim("05_flocks", "with a view half-angle of pi/2, half of the sightings are one-way",
+          rf"phi = 0\.50 pi: .* one-way\s+{NUMBER}%", 50.0, 1.0, None),
+    Claim("05_flocks", "alignment alone: polarization 0.947", rf"^alignment\s+{NUMBER}", 0.947, 5e-4, "0.947"),
+    Claim("05_flocks", "all three rules: polarization 0.997", rf"^separation \+ alignment \+ cohesion\s+{NUMBER}", 0.997, 5e-4, "0.997"),
+    Claim("05_flocks", "every boid of the crowd reaches the goal", rf"goal and rock: {NUMBER}% reached the goal", 100, 0, None),
+    Claim("05_flocks", "no boid goes through the rock", rf"goal and rock: .*?{NUMBER} boids went through it", 0, 0, "none enters the rock"),
+    Claim("05_flocks", "the closest boid stays outside the rock (radius 2 m)",
+          rf"goal and rock: .*closest to the rock's centre {NUMBER} m", 2.0, AT_LEAST, "2.82 m"),
+    # Lecture 6: mass-spring models
+    Claim("06_mass_spring", "hanging string's stretch as statics predicts", rf"measured stretch {NUMBER} mm", 37.278, 5e-4, None),
+    Claim("06_mass_spring", "physical scaling: the same stretch at n = 40", rf"n = 40: stretch {NUMBER} mm", 49.050, 5e-4, None),
+    Claim("06_mass_spring", "hair droop / beam theory at 41 particles", rf"measured / beam theory = \[.* {NUMBER}\]", 0.9506, 5e-5, None),
+    Claim("06_mass_spring", "no shear springs: the curtain tilts by arctan(a / g)",
+          rf"no shear springs: the bottom row tilts by {NUMBER} degrees", 17.0, 0.1, None),
+    Claim("06_mass_spring", "the pins carry the weight M g = 1.962 N",
+          rf"sum of the pin forces: \[\S+\s+\S+\s+{NUMBER}\] N", 1.962, 5e-4, None),
+    Claim("06_mass_spring", "momentum balance with the pin forces closes",
+          rf"largest \|dP/dt - \(M g \+ sum R\)\| = {NUMBER} N", 0.0, 1e-9, None),
+    # Lecture 7: stiffness, Provot, sparsity
+    Claim("07_stiffness_provot_implicit", "h_max falls like k^(-1/2)",
+          rf"symplectic_euler: fitted slope {NUMBER}", -0.5, 5e-4, "$-1/2$"),
+    Claim("07_stiffness_provot_implicit", "RK4's measured omega h_max", rf"rk4: fitted slope \S+, measured omega h_max = \[{NUMBER}", 2.84, 5e-3, "2.84"),
+    Claim("07_stiffness_provot_implicit", "soft curtain: 45% strain after 200 steps",
+          rf"soft springs: largest strain \d+% during the fall, {NUMBER}% after 200 steps", 45, 0.5, None),
+    Claim("07_stiffness_provot_implicit", "Provot's curtain: 10.4% after 200 steps",
+          rf"with the constraint: {NUMBER}% after 200 steps", 10.4, 0.05, None),
+    Claim("07_stiffness_provot_implicit", "the 48 x 48 cloth's K is 0.55% full",
+          rf"48 x 48 cloth: .* fill K\.nnz / \(3n\)\^2 = {NUMBER}%", 0.55, 5e-3, "0.55%"),
+    Claim("07_stiffness_provot_implicit", "at most 39 nonzeros per row of K",
+          rf"48 x 48 cloth: .* nonzeros per row \d+ to {NUMBER}", 39, 0, "39 nonzeros"),
+]
+
+
+def _path(lecture):
+    return ROOT / "lectures" / f"{lecture}.ipynb"
+
+
+def printed_text(nb):
+    """Stream output and ``text/plain`` results of all code cells, concatenated."""
+    parts = []
+    for cell in nb.cells:
+        for out in cell.get("outputs", []) if cell.cell_type == "code" else []:
+            if out.get("output_type") == "stream":
+                parts.append(out.get("text", ""))
+            elif "text/plain" in out.get("data", {}):
+                parts.append(out["data"]["text/plain"] + "\n")
+    return "".join(parts)
+
+
+def _holds(value, expected, tolerance):
+    below, above = tolerance if isinstance(tolerance, tuple) else (tolerance, tolerance)
+    return expected - below <= value <= expected + above
+
+
+def _ids(claims):
+    return [f"{c.lecture[:2]}-{re.sub(r'[^a-z0-9]+', '-', c.claim.lower()).strip('-')[:50]}" for c in claims]
+
+
+def test_every_lecture_has_three_to_six_claims():
+    """The table names every lecture of lectures/ with 3 to 6 claims, each with a number group."""
+    lectures = sorted(p.stem for p in (ROOT / "lectures").glob("[0-9][0-9]_*.ipynb"))
+    counts = {name: sum(c.lecture == name for c in CLAIMS) for name in lectures}
+    assert set(c.lecture for c in CLAIMS) <= set(lectures), "a claim names a lecture that does not exist"
+    assert all(3 <= k <= 6 for k in counts.values()), counts
+    assert all(re.compile(c.pattern).groups >= 1 for c in CLAIMS)
+
+
+@pytest.mark.parametrize("claim", CLAIMS, ids=_ids(CLAIMS))
+def test_the_lecture_prints_its_claim(claim, executed_lecture):
+    """The executed lecture prints the claimed number, within the claim's tolerance."""
+    text = printed_text(executed_lecture(_path(claim.lecture)))
+    match = re.search(claim.pattern, text, flags=re.M)
+    assert match, (f"{claim.lecture}: claim '{claim.claim}': nothing printed matches {claim.pattern!r}")
+    value = float(match.group(1))
+    assert _holds(value, claim.expected, claim.tolerance), (
+        f"{claim.lecture}: claim '{claim.claim}': printed {match.group(0).strip()!r}, i.e. {value:g}, "
+        f"expected {claim.expected:g} within {claim.tolerance}")
+
+
+PROSE = [c for c in CLAIMS if c.prose]
+
+
+@pytest.mark.parametrize("claim", PROSE, ids=_ids(PROSE))
+def test_the_prose_states_the_printed_claim(claim):
+    """The lecture's markdown states the claim with the number its cells print."""
+    nb = nbformat.read(_path(claim.lecture), as_version=4)
+    prose = " ".join(" ".join(cell.source.split()) for cell in nb.cells if cell.cell_type == "markdown")
+    assert claim.prose in prose, f"{claim.lecture}: claim '{claim.claim}': the markdown does not say {claim.prose!r}"
