@@ -18,6 +18,7 @@ heavier and softer as it is refined.
 
 import numpy as np
 
+from .._checks import count, positive_number
 from ..implicit import relax
 from ..massspring import cloth
 from .order import fit_order
@@ -26,12 +27,44 @@ __all__ = ["hanging_cloth", "static_sag", "bounce_period", "discretization_study
 
 
 def hanging_cloth(n, scaling, reference=8, **material):
-    """The study's cloth: n x n particles hanging from the top edge, no damping."""
+    """The study's cloth: n x n particles hanging from the top edge, no damping.
+
+    Parameters
+    ----------
+    n : int
+        Particles per side (>= 3) of the 1 m x 1 m sheet.
+    scaling : {"naive", "physical"}
+        How masses and stiffnesses follow the resolution (see
+        :func:`particles.massspring.cloth`).
+    reference : int
+        Resolution at which the naive constants are calibrated (>= 3).
+    **material
+        Other keywords of :func:`particles.massspring.cloth` (``areal_density``
+        in kg/m^2, ``stretch_modulus`` in N/m, ...).
+
+    Returns
+    -------
+    MassSpringSystem
+        The flat cloth at rest in the vertical plane, its top row pinned.
+    """
+    n = count(n, "n", 3)
     return cloth(n, n, scaling=scaling, pins="top edge", reference=reference, **material)
 
 
 def static_sag(system):
-    """Drop (m) of the lowest particle below its position in the unstretched cloth, at equilibrium."""
+    """Drop (m) of the lowest particle below its position in the unstretched cloth, at equilibrium.
+
+    Parameters
+    ----------
+    system : MassSpringSystem
+        A hanging cloth, flat and at rest (as made by :func:`hanging_cloth`);
+        it is relaxed to its equilibrium in place.
+
+    Returns
+    -------
+    float
+        The sag, in metres (> 0 for a cloth hanging under gravity).
+    """
     z0 = system.X[:, 0, 2].min()
     relax(system, h=0.2)
     return float(z0 - system.X[:, 0, 2].min())
@@ -42,7 +75,26 @@ def bounce_period(system, periods=2, safety=0.5):
 
     Symplectic Euler at `safety` times its stability limit; the period is the
     mean time between successive highest points of the centre of mass.
+
+    Parameters
+    ----------
+    system : MassSpringSystem
+        A hanging cloth, flat and at rest; it is advanced in place.
+    periods : int
+        Number of periods to average over (>= 1).
+    safety : float
+        Time step as a fraction of ``system.max_stable_step()`` (0 < safety <= 1).
+
+    Returns
+    -------
+    float
+        The period in seconds, or NaN if fewer than two highest points were
+        seen within ``20 / sqrt(g)`` seconds.
     """
+    periods = count(periods, "periods", 1)
+    safety = positive_number(safety, "safety")
+    if safety > 1:
+        raise ValueError(f"safety must be in (0, 1], got {safety!r}")
     h = safety * system.max_stable_step()
     g = 9.81
     z = []
@@ -85,7 +137,19 @@ def discretization_study(resolutions=(8, 16, 32), reference=8):
 
 
 def plot_discretization(study):
-    """Three panels against the number of particles per side: sag, period, stable step."""
+    """Three panels against the number of particles per side: sag, period, stable step.
+
+    Parameters
+    ----------
+    study : dict
+        As returned by :func:`discretization_study`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The static sag (mm) and the bounce period (s) against the particles per
+        side, and the largest stable step (s) against the grid spacing (m), log-log.
+    """
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 3, figsize=(13, 4))

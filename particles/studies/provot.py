@@ -8,6 +8,7 @@ Provot's constraint keeps every structural and shear spring within 10%.
 
 import numpy as np
 
+from .._checks import count, positive_number
 from ..constraints import ProvotConstraint
 from ..integrators import symplectic_euler
 from ..massspring import cloth
@@ -16,13 +17,45 @@ __all__ = ["curtain", "provot_study", "plot_provot"]
 
 
 def curtain(n=12, k=30.0):
-    """The slide's curtain: n x n particles, 1 m square, soft springs, two pinned corners."""
+    """The slide's curtain: n x n particles, 1 m square, soft springs, two pinned corners.
+
+    Parameters
+    ----------
+    n : int
+        Particles per side (>= 3).
+    k : float
+        Structural stiffness, in N/m (> 0); shear springs get ``k / 4`` and
+        flexion springs ``k / 10``.
+
+    Returns
+    -------
+    MassSpringSystem
+        The cloth lying flat in the horizontal plane, at rest, held by its two
+        top corners, with gravity and a light damping.
+    """
+    n = count(n, "n", 3)
+    k = positive_number(k, "k", "N/m")
     return cloth(n, n, plane="horizontal", pins="top corners", k_structural=k, k_shear=k / 4,
                  k_flexion=k / 10, damping=0.002)
 
 
 def provot_study(n=12, k=30.0, steps=200, h=0.005, max_strain=0.1, every=5):
     """Simulate the curtain for `steps` steps with and without the constraint.
+
+    Parameters
+    ----------
+    n : int
+        Particles per side (>= 3).
+    k : float
+        Structural stiffness, in N/m (> 0).
+    steps : int
+        Number of time steps of each run (>= 1).
+    h : float
+        Time step of symplectic Euler, in seconds (> 0).
+    max_strain : float
+        Largest relative elongation the constraint allows (> 0; 0.1 is 10%).
+    every : int
+        Record one state every `every` steps (>= 1).
 
     Returns
     -------
@@ -33,6 +66,10 @@ def provot_study(n=12, k=30.0, steps=200, h=0.005, max_strain=0.1, every=5):
         passes per step), ``"tol"``, ``"max_strain"``, ``"system"`` (a curtain,
         for its springs and grid).
     """
+    n, k = count(n, "n", 3), positive_number(k, "k", "N/m")
+    steps, every = count(steps, "steps", 1), count(every, "every", 1)
+    h = positive_number(h, "h", "s")
+    max_strain = positive_number(max_strain, "max_strain")
     out = {"strain": {}, "X": {}, "max_strain": max_strain}
     for label in ("free", "provot"):
         c = curtain(n, k)
@@ -51,7 +88,19 @@ def provot_study(n=12, k=30.0, steps=200, h=0.005, max_strain=0.1, every=5):
 
 
 def plot_provot(study):
-    """Largest strain against time for both runs, and the final shapes side by side."""
+    """Largest strain against time for both runs, and the final shapes side by side.
+
+    Parameters
+    ----------
+    study : dict
+        As returned by :func:`provot_study`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Three panels: the largest strain (%) against time (s), and the final
+        wireframes (m) without and with the constraint.
+    """
     import matplotlib.pyplot as plt
 
     fig = plt.figure(figsize=(12, 4))

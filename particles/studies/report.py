@@ -22,8 +22,26 @@ def _save(fig, out, name):
 
 
 def write_table(out, name, rows):
-    """Write a list of dicts as ``out/name.csv``; returns the path."""
-    path = out / f"{name}.csv"
+    """Write a list of dicts as the CSV table ``out/name.csv``.
+
+    Parameters
+    ----------
+    out : str or pathlib.Path
+        An existing directory.
+    name : str
+        File name without the extension.
+    rows : list of dict
+        One dict per row (at least one), all with the keys of the first, which
+        become the header in their order.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
+    if not isinstance(rows, (list, tuple)) or not rows or not all(isinstance(r, dict) for r in rows):
+        raise ValueError(f"rows must be a non-empty list of dicts, got {type(rows).__name__}")
+    path = Path(out) / f"{name}.csv"
     with open(path, "w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
         writer.writeheader()
@@ -136,7 +154,29 @@ STUDIES = {"order": order, "stability": stability, "provot": provot, "discretiza
 
 
 def write_study(name, out="out/studies", log=print):
-    """Run study `name` (or ``"all"``), write its files into `out`, print a summary; returns the files."""
+    """Run study `name` (or ``"all"``), write its figure and tables into `out`, print a summary.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`STUDIES` (``"order"``, ``"stability"``, ``"provot"``,
+        ``"discretization"``, ``"bounce"``) or ``"all"``.
+    out : str or pathlib.Path
+        Output directory, created if needed.
+    log : callable
+        Receives each line of the summary (a header per study with its run
+        time in seconds and its files, then its key numbers).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written: ``NAME.png`` and ``NAME.svg`` (the figure) and one or
+        more CSV tables per study.
+    """
+    if not callable(log):
+        raise ValueError(f"log must be callable (e.g. print), got {log!r}")
+    if not isinstance(name, str):
+        raise ValueError(f"name must be a study's name (a str), got {name!r}")
     names = list(STUDIES) if name == "all" else [name]
     for n in names:
         if n not in STUDIES:

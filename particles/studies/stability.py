@@ -23,7 +23,7 @@ import time
 
 import numpy as np
 
-from .._checks import positive_number
+from .._checks import as_float_array, count, method_name, positive_number
 from ..integrators import INTEGRATORS
 from .order import fit_order
 
@@ -52,14 +52,58 @@ THEORY_OMEGA_H = {
 """Largest stable ``omega h`` of each stepper on the undamped oscillator."""
 
 
+def _omega(k, m):
+    """``sqrt(k / m)`` (rad/s) after checking both are positive."""
+    return np.sqrt(positive_number(k, "k", "N/m") / positive_number(m, "m", "kg"))
+
+
 def theory_max_step(method, k, m):
-    """Theoretical largest stable step ``(omega h)_max / omega`` for a spring ``k`` (N/m) and mass ``m`` (kg)."""
-    return THEORY_OMEGA_H[method] / np.sqrt(positive_number(k, "k", "N/m") / positive_number(m, "m", "kg"))
+    """Theoretical largest stable step ``(omega h)_max / omega`` of a stepper on the undamped oscillator.
+
+    Parameters
+    ----------
+    method : str
+        A key of :data:`THEORY_OMEGA_H` (the steppers of
+        :data:`particles.integrators.INTEGRATORS`).
+    k : float
+        Spring stiffness, in N/m (> 0).
+    m : float
+        Mass, in kg (> 0).
+
+    Returns
+    -------
+    float
+        The largest stable step, in seconds: 0 for the steppers that are never
+        stable (explicit Euler, midpoint, Heun), ``inf`` for implicit Euler.
+
+    Examples
+    --------
+    >>> round(float(theory_max_step("verlet", 100.0, 1.0)), 6)
+    0.2
+    """
+    omega_h = method_name(method, THEORY_OMEGA_H)
+    if callable(omega_h):
+        raise ValueError(f"method must be a stepper's name, got {method!r}")
+    return omega_h / _omega(k, m)
 
 
 def oscillator(k, m):
-    """Right-hand side of ``m x'' = -k x`` in the layout (1, 2, 1)."""
-    w2 = positive_number(k, "k", "N/m") / positive_number(m, "m", "kg")
+    """Right-hand side ``f(X, t)`` of ``m x'' = -k x``, for states in the layout (1, 2, 1).
+
+    Parameters
+    ----------
+    k : float
+        Spring stiffness, in N/m (> 0).
+    m : float
+        Mass, in kg (> 0).
+
+    Returns
+    -------
+    callable
+        ``f(X, t)`` returning ``dX/dt`` with the shape of `X`, (p, 2, 1): any
+        number ``p`` of independent oscillators, position in m, velocity in m/s.
+    """
+    w2 = _omega(k, m) ** 2
 
     def f(X, t):
         return np.stack([X[:, 1], -w2 * X[:, 0]], axis=1)
@@ -75,9 +119,36 @@ def blows_up(method, k, m, h, steps=1000, growth=1e3):
     an unstable one makes it grow geometrically. The threshold must be large:
     near its limit a stable symplectic Euler lets the energy oscillate by a
     factor ``2 / (2 - omega h)`` without blowing up.
+
+    Parameters
+    ----------
+    method : str or callable
+        A key of :data:`particles.integrators.INTEGRATORS`, or a stepper
+        ``step(f, X, t, h)``.
+    k : float
+        Spring stiffness, in N/m (> 0).
+    m : float
+        Mass, in kg (> 0).
+    h : float
+        Time step, in seconds (> 0).
+    steps : int
+        Number of steps of the test (>= 1).
+    growth : float
+        Amplitude factor counted as a blow-up (> 1).
+
+    Returns
+    -------
+    bool
+        True if the amplitude exceeded `growth` times its start (or became
+        inf/NaN) within `steps` steps.
     """
-    step = INTEGRATORS[method]
+    step = method_name(method, INTEGRATORS)
     f = oscillator(k, m)
+    h = positive_number(h, "h", "s")
+    steps = count(steps, "steps", 1)
+    growth = positive_number(growth, "growth")
+    if growth <= 1:
+        raise ValueError(f"growth must be > 1, got {growth!r}")
     X = np.array([[[1.0], [0.0]]])
     w2 = k / m
     E0 = w2
@@ -96,9 +167,10 @@ def max_stable_step(method, k, m, steps=1000, rtol=2e-3, h_range=None):
 
     Parameters
     ----------
-    method : str
+    method : str or callable
+        A key of :data:`particles.integrators.INTEGRATORS`, or a stepper.
     k, m : float
-        Stiffness (N/m) and mass (kg).
+        Stiffness (N/m) and mass (kg), both > 0.
     steps : int
         Length of each blow-up test. Methods that are unstable for every ``h``
         (explicit Euler, midpoint) seem to have a limit that shrinks as tests
@@ -115,10 +187,13 @@ def max_stable_step(method, k, m, steps=1000, rtol=2e-3, h_range=None):
         The largest stable step in seconds; ``inf`` if the whole bracket is
         stable, 0 if even its lower end blows up.
     """
-    omega = np.sqrt(positive_number(k, "k", "N/m") / positive_number(m, "m", "kg"))
+    method_name(method, INTEGRATORS)
+    omega = _omega(k, m)
+    steps = count(steps, "steps", 1)
+    rtol = positive_number(rtol, "rtol")
     guess = THEORY_OMEGA_H.get(method, 0.0)
     if h_range is not None:
-        lo, hi = h_range
+        lo, hi = _bracket(h_range)
     elif 0 < guess < np.inf:
         lo, hi = 0.5 * guess / omega, 2.0 * guess / omega
     else:
@@ -136,6 +211,18 @@ def max_stable_step(method, k, m, steps=1000, rtol=2e-3, h_range=None):
     return lo
 
 
+def _bracket(h_range):
+    """``(lo, hi)`` of a bisection, two steps in seconds with ``0 < lo < hi``."""
+    try:
+        lo, hi = h_range
+    except (TypeError, ValueError):
+        raise ValueError(f"h_range must be a pair (lo, hi) of steps in seconds, got {h_range!r}") from None
+    lo, hi = positive_number(lo, "h_range[0]", "s"), positive_number(hi, "h_range[1]", "s")
+    if not lo < hi:
+        raise ValueError(f"h_range must have lo < hi, got {h_range!r}")
+    return lo, hi
+
+
 def chain_max_stable_step(method, n, k, m, steps=1000, rtol=2e-3):
     """Largest stable step for a chain of `n` masses between two walls (springs ``k``).
 
@@ -143,8 +230,33 @@ def chain_max_stable_step(method, n, k, m, steps=1000, rtol=2e-3):
     approaching twice the single spring's frequency: a chain needs about half
     the step of one spring. Measured with the same blow-up test on the
     stiffest mode's initial shape.
+
+    Parameters
+    ----------
+    method : str or callable
+        A key of :data:`particles.integrators.INTEGRATORS`, or a stepper.
+    n : int
+        Number of masses (>= 1); the chain has ``n + 1`` springs.
+    k : float
+        Stiffness of every spring, in N/m (> 0).
+    m : float
+        Mass of every particle, in kg (> 0).
+    steps : int
+        Length of each blow-up test (>= 1).
+    rtol : float
+        Relative precision of the bisection (> 0).
+
+    Returns
+    -------
+    float
+        The largest stable step in seconds (``inf`` if ``10 / sqrt(k / m)`` is
+        stable, 0 if even ``1e-6 / sqrt(k / m)`` blows up).
     """
-    step = INTEGRATORS[method]
+    step = method_name(method, INTEGRATORS)
+    n = count(n, "n", 1)
+    _omega(k, m)
+    steps = count(steps, "steps", 1)
+    rtol = positive_number(rtol, "rtol")
     j = np.arange(1, n + 1)
     shape = np.sin(n * np.pi * j / (n + 1))  # the fastest normal mode
 
@@ -203,17 +315,21 @@ def damping_factor(omega_h, steps=50):
 
     Parameters
     ----------
-    omega_h : array_like
-        Values of ``omega h``.
+    omega_h : float or array_like, shape (r,)
+        Values of ``omega h`` (dimensionless, > 0).
     steps : int
-        Steps simulated; the factor is the geometric mean per step.
+        Steps simulated (>= 1); the factor is the geometric mean per step.
 
     Returns
     -------
-    ndarray
-        Amplitude ratio per step, to compare with ``1 / sqrt(1 + (omega h)^2)``.
+    ndarray, shape (r,)
+        Amplitude ratio per step, to compare with ``1 / sqrt(1 + (omega h)^2)``
+        (a scalar `omega_h` gives shape (1,)).
     """
-    wh = np.atleast_1d(np.asarray(omega_h, dtype=float))
+    wh = np.atleast_1d(as_float_array(omega_h, "omega_h", ndim=(0, 1)))
+    if wh.size == 0 or not np.all(wh > 0):
+        raise ValueError(f"omega_h must be > 0 (and not empty), got {np.asarray(omega_h).tolist()!r}")
+    steps = count(steps, "steps", 1)
     # all oscillators at once, omega = wh, h = 1 (only the product matters)
     w2 = wh[:, None] ** 2
 
@@ -280,7 +396,20 @@ def cost_study(ks=(1e2, 1e4, 1e6, 1e8), m=1.0, methods=("symplectic_euler", "rk4
 
 
 def plot_stability(study, ax=None):
-    """Log-log plot of measured (markers) and theoretical (lines) largest stable steps against k."""
+    """Log-log plot of measured (markers) and theoretical (lines) largest stable steps against k.
+
+    Parameters
+    ----------
+    study : dict
+        As returned by :func:`stability_study`.
+    ax : matplotlib.axes.Axes, optional
+        Where to draw (default: a new 6 x 4.5 inch figure).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure of `ax`: h (s) against k (N/m), one colour per stepper.
+    """
     import matplotlib.pyplot as plt
 
     if ax is None:
