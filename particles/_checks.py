@@ -96,3 +96,11 @@ def finite_real(value, name, unit=""):
     if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
         value = value[()]
     return _real(value, name, what)
+
+
+def end_time(t_end, t, owner="system"):
+    """`t_end` of a ``run`` from the current time `t`: a finite real number, not before `t`."""
+    t_end = finite_real(t_end, "t_end", "seconds")
+    if t_end < t:
+        raise ValueError(f"t_end must be >= the current time t = {t!r} s of the {owner}, got {t_end!r}")
+    return t_end

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._checks import as_float_array, method_name, positive_number
+from ._checks import as_float_array, end_time, method_name, positive_number
 from .collisions import Collider
 from .emitters import LIFE_TOL, Emitter, ParticleEmitter
 from .errors import SimulationDiverged
@@ -381,7 +381,7 @@ class ParticleEffect:
         """
         if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
             raise ValueError(f"every must be a positive integer, got {every!r}")
-        times = step_times(self.t, t_end, h)
+        times = step_times(self.t, end_time(t_end, self.t, "effect"), h)
         frames = [self.snapshot()]
         for k in range(1, len(times)):  # a loop over time steps
             self.step(times[k] - times[k - 1])

@@ -11,8 +11,11 @@ __all__ = ["SimulationDiverged", "ConvergenceError"]
 class SimulationDiverged(RuntimeError):
     """The state blew up (inf, NaN, or a trillion-fold growth) during a simulation.
 
-    Raised by :func:`particles.integrators.integrate` and
-    :meth:`particles.ParticleSystem.run` instead of returning NaNs.
+    Raised by :func:`particles.integrators.integrate`,
+    :meth:`particles.ParticleSystem.run` and the other ``run`` and ``step``
+    methods instead of returning NaNs. The growth rule (``blowup``, default
+    ``1e12``) catches an unstable run before it overflows; a problem whose
+    true solution grows that much passes ``blowup=None``.
 
     Attributes
     ----------

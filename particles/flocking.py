@@ -31,7 +31,7 @@ References
 
 import numpy as np
 
-from ._checks import as_float_array, nonnegative_number, positive_number
+from ._checks import as_float_array, end_time, nonnegative_number, positive_number
 from .errors import SimulationDiverged
 from .forces import Force, pair_differences
 from .integrators import step_times
@@ -315,7 +315,7 @@ class Flock:
         """
         if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
             raise ValueError(f"every must be a positive integer, got {every!r}")
-        times = step_times(self.t, t_end, h)
+        times = step_times(self.t, end_time(t_end, self.t, "flock"), h)
         out = [self.system.state()]
         for k in range(1, len(times)):  # a loop over time steps
             self.step(times[k] - times[k - 1])

@@ -20,7 +20,7 @@ References
 
 import numpy as np
 
-from ._checks import as_float_array, finite_real, method_name, positive_number
+from ._checks import as_float_array, end_time, finite_real, method_name, positive_number
 from .integrators import BLOWUP_FACTOR, INTEGRATORS, integrate
 
 __all__ = ["ParticleSystem"]
@@ -467,11 +467,7 @@ class ParticleSystem:
         ValueError
             When ``t_end`` is not a finite number at least the current time.
         """
-        t_end = finite_real(t_end, "t_end", "seconds")
-        if t_end < self.t:
-            raise ValueError(
-                f"t_end must be >= the current time t = {self.t!r} s of the system, got {t_end!r}"
-            )
+        t_end = end_time(t_end, self.t)
         t, X = integrate(
             self.derivative, self.X, self.t, t_end, h, method=method, every=every, blowup=blowup, **options
         )

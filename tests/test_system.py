@@ -282,3 +282,18 @@ def test_energy_and_momentum_of_a_given_state():
     X = np.zeros((2, 2, 2))
     assert ps.kinetic_energy(X) == 0.0 and ps.potential_energy(X) == 0.0
     np.testing.assert_array_equal(ps.momentum(X), [0.0, 0.0])
+
+
+def test_runs_name_t_end_when_it_is_before_the_current_time():
+    """ParticleSystem, Flock and ParticleEffect runs all say `t_end`, not the internal t1, when it lies in the past."""
+    from particles.effects import ParticleEffect
+    from particles.flocking import Boids, Flock
+
+    ps = ParticleSystem([[0.0, 0.0]], t=1.0)
+    with pytest.raises(ValueError, match=r"t_end must be >= the current time t = 1.0 s of the system, got 0.5"):
+        ps.run(0.5, 0.1)
+    flock = Flock(np.zeros((3, 2)) + np.arange(3)[:, None], np.ones((3, 2)), Boids(1.0))
+    with pytest.raises(ValueError, match="t_end must be >= the current time t = 0.0 s of the flock"):
+        flock.run(-1.0, 0.1)
+    with pytest.raises(ValueError, match="t_end must be >= the current time t = 0.0 s of the effect"):
+        ParticleEffect(d=2).run(-1.0, 0.1)

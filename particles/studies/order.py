@@ -47,7 +47,22 @@ def fit_order(h, error):
 
 
 def global_error(problem, method, n_steps):
-    """Max-norm error at ``problem.t1`` after `n_steps` equal steps of `method`."""
+    """Max-norm error at ``problem.t1`` after `n_steps` equal steps of `method`.
+
+    Parameters
+    ----------
+    problem : particles.problems.Problem
+        An initial value problem with its exact solution.
+    method : str
+        A key of :data:`particles.integrators.INTEGRATORS`.
+    n_steps : int
+        Number of equal steps from ``problem.t0`` to ``problem.t1``.
+
+    Returns
+    -------
+    float
+        ``max |X_N - X(t1)|`` over all components, in the units of the state.
+    """
     h = (problem.t1 - problem.t0) / n_steps
     _, X = integrate(problem.f, problem.X0, problem.t0, problem.t1, h, method=method, every=n_steps)
     return problem.error(X[-1])
@@ -94,7 +109,18 @@ def convergence_study(problem="harmonic_oscillator", methods=None, n_steps=None)
 
 
 def format_table(study):
-    """A plain-text table of a :func:`convergence_study`: method, expected and observed order."""
+    """A plain-text table of a :func:`convergence_study`: method, expected and observed order.
+
+    Parameters
+    ----------
+    study : dict
+        As returned by :func:`convergence_study`.
+
+    Returns
+    -------
+    str
+        One line per method, with the error at the smallest step.
+    """
     lines = [f"{'method':<18}{'expected':>9}{'observed':>10}   error at smallest h",
              "-" * 60]
     for m, p in study["order"].items():
