@@ -3,7 +3,11 @@
 Public tests use fixed inputs a student can reason about (the circle field from
 (1, 0), a driven oscillator, made-up error sequences); hidden tests draw random
 states, shapes, times, problems and error sequences from the grading seed
-(fixture ``rng``). Every expected value comes from the reference library
+(fixture ``rng``). A measured order must be near the method's order in the
+asymptotic range and, at any step counts, within 0.02 of the slope the reference
+measures on the same problem (coarse steps, where that slope is not the nominal
+order, catch an answer that returns the order without measuring it). Every
+expected value comes from the reference library
 (``particles.integrators``, ``particles.studies.order``), computed here in the
 grader, never in the student's process.
 """
@@ -46,6 +50,7 @@ METHODS = list(STEPS)
 N_STEPS = {"euler": [200, 400, 800, 1600], "midpoint": [40, 80, 160, 320],
            "trapezoid": [40, 80, 160, 320], "rk4": [20, 40, 80, 160]}
 ORDER_TOLERANCE = 0.15
+SLOPE_TOLERANCE = 0.02  # measured_order against the reference slope on the same problem and step counts
 
 
 # -- helpers -----------------------------------------------------------------------------------
@@ -155,11 +160,17 @@ def _diagnosis(student, method):
             "(the loop and the error) and observed_order (the slope)")
 
 
-def _judge_order(student, method, name, params):
-    """measured_order(method, ...) of the student on problem `name`, judged against the method's order."""
+def _judge_order(student, method, name, params, n_steps=None):
+    """measured_order(method, ...) of the student on problem `name`, judged against what it should measure.
+
+    With the default step counts (asymptotic range) the value must be within ORDER_TOLERANCE of the
+    method's order; with any step counts it must be within SLOPE_TOLERANCE of the slope the reference
+    library measures for the same problem and step counts, so a hard-coded order does not pass.
+    """
     f, exact = remote(name, **params), remote(name, attr="exact", **params)
     problem = f.problem
-    n_steps = N_STEPS[method]
+    asymptotic = n_steps is None
+    n_steps = N_STEPS[method] if asymptotic else list(n_steps)
     got = student.call("measured_order", method, f, problem.X0, problem.t0, problem.t1, exact, n_steps)
     call = (f"measured_order('{method}', f, X0, t0={problem.t0:g}, t1={problem.t1:.3g}, exact, "
             f"n_steps={n_steps}) on {_LABELS[name]}")
@@ -167,10 +178,24 @@ def _judge_order(student, method, name, params):
         got = got[()]
     if isinstance(got, (bool, np.bool_)) or not isinstance(got, (int, float, np.integer, np.floating)):
         raise GradingFailure(f"{call} returned {describe_value(got)}, expected a number")
-    try:
-        expect_order(float(got), STEPS[method][2], f"your {method} step ({call})", tolerance=ORDER_TOLERANCE)
-    except GradingFailure as failure:
-        raise GradingFailure(str(failure) + _diagnosis(student, method)) from None
+    got = float(got)
+    nominal = STEPS[method][2]
+    if asymptotic:
+        try:
+            expect_order(got, nominal, f"your {method} step ({call})", tolerance=ORDER_TOLERANCE)
+        except GradingFailure as failure:
+            raise GradingFailure(str(failure) + _diagnosis(student, method)) from None
+    reference = _reference_order(problem, method, n_steps)
+    if not abs(got - reference) <= SLOPE_TOLERANCE:
+        message = (f"{call} returned {got:.4g}, but the global errors of the {method} method at these step "
+                   f"counts fall with a least-squares slope of {reference:.4g} (measured by the reference, "
+                   f"tolerance {SLOPE_TOLERANCE:g})")
+        if got == nominal:
+            message += (f"; {got:g} is the method's nominal order, not a measurement: return the slope of "
+                        "your own errors, whatever it comes out as")
+        else:
+            message += _diagnosis(student, method)
+        raise GradingFailure(message)
 
 
 def _reference_final(step, f, X0, t0, t1, N):
@@ -358,3 +383,30 @@ def test_measured_order_random(student, rng, method):
     """measured_order finds each stepper's order on a random driven oscillator and one other random problem."""
     for name in ["forced_oscillator", str(rng.choice(["circle", "harmonic_oscillator", "projectile_drag"]))]:
         _judge_order(student, method, name, _clean_problem(rng, name, method))
+
+
+def _coarse_problem(rng, method):
+    """A random problem and coarse step counts on which the reference slope misses the nominal order.
+
+    Far from the asymptotic range (a handful of steps over several seconds) the measured slope differs
+    from the order by 0.1 or more (Euler on the circle at 4, 8, 16 steps measures 1.23): a submission
+    that measures passes, one that returns the textbook order does not.
+    """
+    for _ in range(50):
+        name = str(rng.choice(["circle", "harmonic_oscillator", "forced_oscillator"]))
+        params = _random_problem(rng, name)
+        n0 = int(rng.integers(3, 7))
+        n_steps = [n0, 2 * n0, 4 * n0]
+        order = _reference_order(get_problem(name, **params), method, n_steps)
+        if 0.1 <= abs(order - STEPS[method][2]) <= 1.0:
+            return name, params, n_steps
+    raise RuntimeError(f"no coarse problem for {method} in 50 draws")
+
+
+@pytest.mark.points(1)
+@pytest.mark.hidden
+@pytest.mark.parametrize("method", METHODS)
+def test_measured_order_coarse_steps(student, rng, method):
+    """measured_order reports the slope it measures, also at coarse steps where it is not the nominal order."""
+    name, params, n_steps = _coarse_problem(rng, method)
+    _judge_order(student, method, name, params, n_steps)

@@ -5,7 +5,9 @@ at the wrong time (invisible on the time-independent circle field, caught by
 the driven oscillator), trapezoid weights that are off, an RK4 with a wrong
 coefficient, an Euler step that overwrites the caller's state, an order fit
 from two points or with mixed logarithms, the Euclidean norm for the error,
-and the library's own stepper. The correct variant is written differently from
+the library's own stepper, and a measured_order that returns the textbook order
+without measuring (caught where coarse steps make the measured slope differ from
+it). The correct variant is written differently from
 the master throughout.
 """
 
@@ -124,6 +126,22 @@ def convergence_errors(method, f, X0, t0, t1, exact, n_steps):
             "test_convergence_errors_circle": "your result matches the Euclidean norm of X_N - X(t1)",
         },
         "passes": ["test_measured_order_circle[euler]", "test_observed_order_noisy"],
+    },
+    # No measurement at all: the nominal orders, hard-coded. Close enough to the measured slopes in the
+    # asymptotic range of the circle field, but not at coarse steps, where the slope is 1.1-1.4 for Euler.
+    "hardcoded_measured_order": {
+        "replace": {"measured_order": '''
+def measured_order(method, f, X0, t0, t1, exact, n_steps):
+    return {"euler": 1, "midpoint": 2, "trapezoid": 2, "rk4": 4}[method]
+'''},
+        "fails": {
+            "test_measured_order_coarse_steps[euler]": "1 is the method's nominal order, not a measurement",
+            "test_measured_order_coarse_steps[midpoint]": "2 is the method's nominal order, not a measurement",
+            "test_measured_order_coarse_steps[trapezoid]": "but the global errors of the trapezoid method",
+            "test_measured_order_coarse_steps[rk4]": "4 is the method's nominal order, not a measurement",
+        },
+        "passes": ["test_measured_order_circle[euler]", "test_measured_order_circle[rk4]",
+                   "test_convergence_errors_circle", "test_observed_order_noisy", "test_step_circle[rk4]"],
     },
     "midpoint_from_the_library": {
         "replace": {"midpoint_step": '''

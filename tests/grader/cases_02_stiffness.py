@@ -7,6 +7,7 @@ RANDOM = "test_max_stable_step_random"
 EULER = "test_max_stable_step_euler_has_none"
 MEASURED = "test_max_stable_step_is_measured"
 CHAIN = ["test_chain_max_stable_step_four_masses", "test_chain_max_stable_step_random"]
+CHAIN_MEASURED = "test_chain_max_stable_step_is_measured"
 BLOWS_UP = ["test_blows_up_around_the_limits", "test_blows_up_random"]
 IMPLICIT = ["test_implicit_euler_spring_one_step", "test_implicit_euler_spring_random"]
 DAMPING = ["test_damping_factor_public", "test_damping_factor_random"]
@@ -50,6 +51,56 @@ def max_stable_step(method, k, m, steps=200, rtol=0.01):
 '''},
         "fails": {MEASURED: "a 20-step test lets steps up to omega h = 2.97"},
         "passes": [ONE_SPRING, RANDOM, EULER] + CHAIN + BLOWS_UP + IMPLICIT + DAMPING + COST,
+    },
+    # The chain's limit from the formula for omega_max given in the notebook, not measured: right for long
+    # tests, but a 20-step test lets RK4 go 5% past it.
+    "chain_from_theory": {
+        "replace": {"chain_max_stable_step": '''
+def chain_max_stable_step(method, n, k, m, steps=200, rtol=0.01):
+    limit = {"symplectic_euler": 2.0, "verlet": 2.0, "rk4": 2.0 * np.sqrt(2.0)}.get(method, 0.0)
+    return limit / (2 * np.sqrt(k / m) * np.sin(n * np.pi / (2 * (n + 1))))
+'''},
+        "fails": {CHAIN_MEASURED: "a 20-step test lets steps up to omega_max h = 2.9"},
+        "passes": [ONE_SPRING, RANDOM, EULER, MEASURED] + CHAIN + BLOWS_UP + IMPLICIT + DAMPING + COST,
+    },
+    # Everything from theory: the blow-up test compares omega h with the limit, the limits are the table of
+    # lecture 7 (with a 5% allowance for short tests), the cost uses them, the damping is the closed form.
+    "all_from_theory": {
+        "replace": {
+            "blows_up": '''
+def blows_up(method, k, m, h, steps=200):
+    limit = {"symplectic_euler": 2.0, "verlet": 2.0, "rk4": 2.0 * np.sqrt(2.0)}.get(method, 0.0)
+    w = np.sqrt(k / m)
+    if limit == 0.0:
+        return steps * (w * h) ** 2 > 13.8
+    return w * h > limit
+''',
+            "max_stable_step": '''
+def max_stable_step(method, k, m, steps=200, rtol=0.01):
+    limit = {"symplectic_euler": 2.0, "verlet": 2.0, "rk4": 2.0 * np.sqrt(2.0) * (1.05 if steps < 50 else 1.0)}
+    return limit.get(method, 0.0) / np.sqrt(k / m)
+''',
+            "chain_max_stable_step": '''
+def chain_max_stable_step(method, n, k, m, steps=200, rtol=0.01):
+    limit = {"symplectic_euler": 2.0, "verlet": 2.0, "rk4": 2.0 * np.sqrt(2.0)}.get(method, 0.0)
+    return limit / (2 * np.sqrt(k / m) * np.sin(n * np.pi / (2 * (n + 1))))
+''',
+            "cost_table": '''
+def cost_table(ks, m=1.0, T=1.0, h_implicit=0.01):
+    w = np.sqrt(np.asarray(ks, dtype=float) / m)
+    return {"symplectic_euler": np.ceil(T / (0.9 * 2.0 / w)).astype(int),
+            "rk4": np.ceil(T / (0.9 * 2.0 * np.sqrt(2.0) / w)).astype(int),
+            "implicit_euler": np.full(len(w), int(np.ceil(T / h_implicit)))}
+''',
+            "damping_factor": '''
+def damping_factor(omega_h, steps=50):
+    return 1 / np.sqrt(1 + np.asarray(omega_h, dtype=float) ** 2)
+''',
+        },
+        "fails": {BLOWS_UP[1]: "just above the theoretical 2.83) returned True, expected False",
+                  MEASURED: "-step test lets steps up to omega h = 3.",
+                  CHAIN_MEASURED: "a 20-step test lets steps up to omega_max h = 2.9"},
+        "passes": [ONE_SPRING, RANDOM, EULER, BLOWS_UP[0]] + CHAIN + IMPLICIT + DAMPING + COST,
     },
     # No confirmation with a longer test: explicit Euler gets the 'limit' of a 200-step test.
     "euler_gets_a_limit": {
