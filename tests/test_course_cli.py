@@ -70,3 +70,14 @@ def test_one_notebook_per_student_and_exercise(tmp_path, capsys):
     assert main(["grade", str(tmp_path / "subs"), "--public", "--root", str(ROOT)]) == 0
     captured = capsys.readouterr()
     assert "5/5" in captured.out and "several notebooks for 00_warmup" in captured.err
+
+
+@pytest.mark.parametrize("option, value, name", [("--time-limit", "-1", "time_limit"), ("--time-limit", "nan", "time_limit"),
+                                                 ("--memory-mb", "0", "memory_mb")])
+def test_grade_rejects_bad_limits(tmp_path, capsys, option, value, name):
+    """A time limit or memory limit that is not a finite number > 0 is a usage error (status 2) naming it."""
+    notebook = str(ROOT / "solutions" / "00_warmup.ipynb")
+    assert main(["grade", notebook, "--out", str(tmp_path / "out"), option, value, "--root", str(ROOT)]) == 2
+    err = capsys.readouterr().err
+    assert f"particles grade: {name} must be a finite number > 0" in err
+    assert not (tmp_path / "out").exists()

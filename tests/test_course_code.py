@@ -50,3 +50,32 @@ def test_parameters_and_skipped_assignments():
     code = _code("def step(f, X, t, h):\n    return X", "stepper = make()")
     assert code.parameters("step") == ["f", "X", "t", "h"]
     assert code.skipped_assignment("stepper").text == "stepper = make()"
+
+
+def test_a_cell_source_that_is_not_text_makes_the_notebook_unreadable(tmp_path):
+    """A code cell whose source holds numbers, or cells that are not a list, is an unreadable notebook (ValueError)."""
+    import json
+
+    import pytest
+
+    from particles.course.code import notebook_cells
+
+    cases = {"numbers": {"cells": [{"cell_type": "code", "source": [1, 2]}]},
+             "a_dict": {"cells": [{"cell_type": "code", "source": {"a": 1}}]},
+             "cells_dict": {"cells": {"a": 1}}}
+    for name, notebook in cases.items():
+        (tmp_path / f"{name}.ipynb").write_text(json.dumps(notebook))
+    with pytest.raises(ValueError, match=r"the source of code cell 1 holds a list with an item of type int, not text"):
+        notebook_cells(tmp_path / "numbers.ipynb")
+    with pytest.raises(ValueError, match=r"the source of code cell 1 holds a value of type dict, not text"):
+        notebook_cells(tmp_path / "a_dict.ipynb")
+    with pytest.raises(ValueError, match=r"its cells are a dict, not a list"):
+        notebook_cells(tmp_path / "cells_dict.ipynb")
+
+
+def test_a_null_byte_is_a_syntax_error_without_line_none():
+    """A null byte in a cell is reported as that cell's syntax error, with no 'line None'."""
+    code = _code("def f():\n    return 1\x00\n", "def g():\n    return 1")
+    assert len(code.syntax_errors) == 1 and code.syntax_errors[0][0] == "code cell 1"
+    assert "null bytes" in code.syntax_errors[0][1] and "None" not in code.syntax_errors[0][1]
+    assert "g" in code.defines()

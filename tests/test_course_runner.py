@@ -4,6 +4,7 @@ import json
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import nbformat
 import numpy as np
@@ -13,6 +14,8 @@ from particles.course.code import SubmissionCode
 from particles.course.grading import grade
 from particles.course.release import release
 from particles.course.runner import GradingFailure, Submission
+
+ROOT = Path(__file__).resolve().parents[1]
 
 SOURCE = """
 import os, socket, subprocess, time
@@ -154,3 +157,149 @@ def test_a_forbidden_class_keeps_its_library_subclasses_working():
     assert result.returncode == 0, result.stderr[-2000:]
     assert "refused: particles.system.ParticleSystem is not allowed in this exercise: write the loop yourself" \
         in result.stdout
+
+
+ECHO_TESTS = '''
+import json, os, signal
+import pytest
+
+EXERCISE = "98_echo"
+
+
+@pytest.mark.points(2)
+def test_echo(student, request):
+    """echo returns its argument."""
+    value = student.call("echo", 3)
+    if value in ("kill", "forge"):  # stands for a submission that got out of its worker's walls
+        forged = {"submissions": [{"id": str(k), "seed": 0, "seconds": 0.1, "tests": [
+            {"test": name, "name": name, "points": 2.0, "hidden": False, "passed": True, "reason": "",
+             "grader_error": False, "seconds": 0.0, "seed": None}
+            for name in ("test_echo", "test_nap_marked", "test_nap_default")]} for k in range(10)]}
+        with open(request.config.getoption("--grading-results"), "w") as f:
+            f.write(json.dumps(forged))
+        if value == "kill":  # forge the records, then kill the session before it writes its own
+            os.kill(os.getpid(), signal.SIGKILL)
+        request.config.option.grading_results = os.devnull  # forge them, and keep the session's own away
+    assert value == 3, f"echo(3) returned {value!r}"
+
+
+@pytest.mark.time_limit(3.0)
+def test_nap_marked(student):
+    """A test with its own time limit: nap(1.0) has 3 s, whatever --time-limit says."""
+    assert student.call("nap", 1.0) == 1.0
+
+
+def test_nap_default(student):
+    """A test without one: --time-limit is its limit."""
+    assert student.call("nap", 1.0) == 1.0
+'''
+
+
+def _echo_course(tmp_path, students):
+    """A course folder with exercise 98_echo (see ECHO_TESTS) and a notebook per student: name -> echo's body."""
+    root = tmp_path / "course"
+    (root / "tests" / "exercises").mkdir(parents=True)
+    (root / "tests" / "exercises" / "test_98_echo.py").write_text(ECHO_TESTS)
+    subs = tmp_path / "subs"
+    for name, body in students.items():
+        source = f"import time\n\ndef echo(x):\n    {body}\n\ndef nap(s):\n    time.sleep(s)\n    return s"
+        nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(source)])
+        (subs / name).mkdir(parents=True)
+        nbformat.write(nb, str(subs / name / "98_echo.ipynb"))
+    return root, subs
+
+
+def test_records_of_a_killed_or_forged_session_are_discarded(tmp_path, monkeypatch):
+    """Records of a session killed after forging them, or forged while the session's own went elsewhere, do
+    not count: the batch is graded again notebook by notebook, and the forger gets every test 'not run'."""
+    import particles.course.grading as grading
+
+    root, subs = _echo_course(tmp_path, {"good": "return x", "killer": "return 'kill'", "forger": "return 'forge'"})
+    monkeypatch.setattr(grading, "_batches", lambda units, jobs: [sorted(units, key=lambda u: u.student)])
+    summary = grade([subs], tmp_path / "out", root=root, seed=1, jobs=1)
+    tests = {s: {t["test"]: t for t in r[0]["tests"]} for s, r in summary["students"].items()}
+    assert all(t["passed"] for t in tests["good"].values()), tests["good"]
+    for student, why in (("killer", "pytest exit status -9"),
+                         ("forger", "the session's records were missing or not the ones it signed")):
+        assert len(tests[student]) == 3 and not any(t["passed"] for t in tests[student].values()), tests[student]
+        assert all(t["reason"].startswith(f"not run: grading stopped early ({why})")
+                   for t in tests[student].values()), tests[student]
+    logs = sorted(p.name for p in (tmp_path / "out" / "logs").iterdir())
+    assert "killer-98_echo.log" in logs and "forger-98_echo.log" in logs  # each graded again, alone
+
+
+def test_a_records_file_without_the_sessions_signature_is_refused(tmp_path):
+    """read_records accepts the file signed with the session's key only: not unsigned, altered or re-signed."""
+    from particles.course.grading import read_records, sign_records
+
+    key = b"k" * 32
+    body = json.dumps({"submissions": [{"id": "0", "tests": []}]})
+    path = tmp_path / "records.json"
+    path.write_text(json.dumps({"body": body, "signature": sign_records(body, key)}))
+    assert read_records(path, key) == {"0": {"id": "0", "tests": []}}
+    assert read_records(path, b"x" * 32) is None
+    forged = body.replace('"tests": []', '"tests": [{"passed": true}]')
+    for text in (body, json.dumps({"body": forged, "signature": sign_records(body, key)}),
+                 json.dumps({"body": forged, "signature": sign_records(forged, b"guess")}), "{", ""):
+        path.write_text(text)
+        assert read_records(path, key) is None
+    assert read_records(tmp_path / "missing.json", key) is None
+
+
+def test_a_time_limit_marker_wins_over_the_default(tmp_path):
+    """--time-limit is the limit of tests without a marker; a test's time_limit marker keeps its own."""
+    root, subs = _echo_course(tmp_path, {"good": "return x"})
+    summary = grade([subs], None, root=root, seed=1, time_limit=0.5)
+    tests = {t["test"]: t for t in summary["students"]["good"][0]["tests"]}
+    assert tests["test_nap_marked"]["passed"], tests["test_nap_marked"]["reason"]
+    assert "did not finish within 0.5 s" in tests["test_nap_default"]["reason"]
+
+
+def test_a_submission_cannot_read_a_classmates_notebook_or_the_grades(tmp_path):
+    """The submissions folder and the output folder are private: a worker may not read or list them."""
+    subs, out = tmp_path / "subs", tmp_path / "out"
+    (subs / "alice").mkdir(parents=True)
+    (subs / "alice" / "00_warmup.ipynb").write_text((ROOT / "solutions" / "00_warmup.ipynb").read_text())
+    peek = f'''
+import json, os
+
+def euler_step(f, X, t, h):
+    cells = json.load(open({str(subs / "alice" / "00_warmup.ipynb")!r}))["cells"]
+    namespace = {{"np": np}}
+    exec(next("".join(c["source"]) for c in cells if "".join(c["source"]).startswith("def euler_step")), namespace)
+    return namespace["euler_step"](f, X, t, h)
+
+def total_force(x, v, m, g, d):
+    os.listdir({str(out)!r})
+    return m[:, None] * g - d * v
+'''
+    nb = json.loads((ROOT / "exercises" / "00_warmup.ipynb").read_text())
+    for name in ("total_force", "euler_step"):  # total_force first: the new euler_step cell defines both
+        cell = next(c for c in nb["cells"] if c["cell_type"] == "code" and f"def {name}(" in "".join(c["source"]))
+        cell["source"] = peek if name == "euler_step" else "# total_force is defined with euler_step"
+    (subs / "mallory").mkdir()
+    (subs / "mallory" / "00_warmup.ipynb").write_text(json.dumps(nb))
+    summary = grade([subs], out, root=ROOT, seed=1, public_only=True)
+    alice = summary["students"]["alice"][0]["tests"]
+    assert all(t["passed"] for t in alice)
+    mallory = {t["test"]: t for t in summary["students"]["mallory"][0]["tests"]}
+    assert "read its private files" in mallory["test_euler_step_circle"]["reason"]
+    assert "alice" in mallory["test_euler_step_circle"]["reason"]
+    assert "list its private folders" in mallory["test_total_force_three_particles"]["reason"]
+
+
+@pytest.mark.parametrize("limits, name", [
+    ({"time_limit": -1.0}, "time_limit"), ({"time_limit": 0}, "time_limit"),
+    ({"time_limit": float("nan")}, "time_limit"), ({"time_limit": float("inf")}, "time_limit"),
+    ({"memory_mb": 0}, "memory_mb"), ({"memory_mb": -5}, "memory_mb"), ({"memory_mb": True}, "memory_mb"),
+    ({"load_time_limit": "5"}, "load_time_limit"),
+])
+def test_bad_limits_are_rejected(tmp_path, limits, name):
+    """A limit that is not a finite number > 0 raises ValueError naming it, in Submission and in grade."""
+    code = SubmissionCode.from_cells([("code cell 1", "def f():\n    return 1.0")])
+    with pytest.raises(ValueError, match=f"{name} must be a finite number > 0"):
+        Submission(code, **limits)
+    if name in ("time_limit", "memory_mb"):
+        with pytest.raises(ValueError, match=f"{name} must be a finite number > 0"):
+            grade([ROOT / "solutions" / "00_warmup.ipynb"], tmp_path / "out", root=ROOT, **limits)
+        assert not (tmp_path / "out").exists()

@@ -71,21 +71,39 @@ def notebook_cells(path):
     Raises
     ------
     ValueError
-        When the file is not a readable notebook.
+        When the file is not a readable notebook: not JSON, no list of
+        ``cells``, or a code cell whose ``source`` is neither a string nor a
+        list of strings.
     """
     try:
         notebook = json.loads(Path(path).read_text(encoding="utf-8"))
         cells = notebook["cells"]
     except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError) as error:
         raise ValueError(f"{path} is not a readable Jupyter notebook ({type(error).__name__}: {error})") from None
+    if not isinstance(cells, list):
+        raise ValueError(f"{path} is not a readable Jupyter notebook (its cells are a {type(cells).__name__}, "
+                         "not a list)")
     out, k = [], 0
     for cell in cells:
         if not isinstance(cell, dict) or cell.get("cell_type") != "code":
             continue
         k += 1
         source = cell.get("source", "")
-        out.append((f"code cell {k}", "".join(source) if isinstance(source, list) else str(source)))
+        if isinstance(source, list) and all(isinstance(line, str) for line in source):
+            source = "".join(source)
+        elif not isinstance(source, str):
+            raise ValueError(f"{path} is not a readable Jupyter notebook (the source of code cell {k} holds "
+                             f"{_kind_of(source)}, not text)")
+        out.append((f"code cell {k}", source))
     return out
+
+
+def _kind_of(source):
+    """What a cell's source holds when it is not text, e.g. "a list with an item of type int"."""
+    if isinstance(source, list):
+        bad = next(line for line in source if not isinstance(line, str))
+        return f"a list with an item of type {type(bad).__name__}"
+    return f"a value of type {type(source).__name__}"
 
 
 def _strip_magics(source):
@@ -218,8 +236,9 @@ class SubmissionCode:
             source = _strip_magics(source)
             try:
                 tree = ast.parse(source)
-            except SyntaxError as error:
-                code.syntax_errors.append((label, f"line {error.lineno}: {error.msg}"))
+            except (SyntaxError, ValueError) as error:  # ValueError: a null byte, before Python 3.12
+                where = f"line {error.lineno}: " if getattr(error, "lineno", None) else ""
+                code.syntax_errors.append((label, f"{where}{getattr(error, 'msg', None) or error}"))
                 continue
             parsed.append((label, source, tree))
         aliases = _Aliases()

@@ -76,7 +76,25 @@ def expect_array(value, expected, call, rtol=1e-10, atol=1e-12, hints=None):
 
 
 def expect_float(value, expected, call, rtol=1e-10, atol=1e-12):
-    """Check that `value` is a real number (Python or NumPy scalar) close to `expected`."""
+    """Check that `value` is a real number (Python or NumPy scalar) close to `expected`.
+
+    Parameters
+    ----------
+    value : object
+        What the student's function returned: an int, a float, a NumPy
+        scalar or a 0-d array pass the type check (a bool does not).
+    expected : float
+        The reference number.
+    call : str
+        How the call reads in a message, e.g. ``"energy(X, k=2.0)"``.
+    rtol, atol : float
+        Passes when ``|value - expected| <= atol + rtol |expected|``.
+
+    Raises
+    ------
+    GradingFailure
+        When `value` is not a number, is NaN or inf, or is out of tolerance.
+    """
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
         if isinstance(value, np.ndarray) and value.shape == ():
             value = value[()]
@@ -86,6 +104,25 @@ def expect_float(value, expected, call, rtol=1e-10, atol=1e-12):
 
 
 def expect_order(observed, expected, call, tolerance=0.2):
-    """Check an observed order of convergence, e.g. ``"converges with order 1.02, expected 2"``."""
+    """Check an observed order of convergence, e.g. ``"converges with order 1.02, expected 2"``.
+
+    Parameters
+    ----------
+    observed : float
+        The order measured from the student's results (e.g. the slope of
+        log error against log step size).
+    expected : float
+        The order of the method (1 for Euler, 2 for midpoint, 4 for RK4).
+    call : str
+        What was measured, for the message, e.g. ``"midpoint_step"``.
+    tolerance : float
+        Passes when ``|observed - expected| <= tolerance``.
+
+    Raises
+    ------
+    GradingFailure
+        When `observed` is NaN or inf, or further than `tolerance` from
+        `expected`.
+    """
     if not np.isfinite(observed) or abs(observed - expected) > tolerance:
         raise GradingFailure(f"{call} converges with order {observed:.2f}, expected {expected:g}")

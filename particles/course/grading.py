@@ -13,6 +13,14 @@ record is recorded as failed with the reason. So every submission yields a
 record and the driver never stops on a submission. ``--jobs N`` runs N
 sessions at a time.
 
+The driver trusts a session's records only when pytest ended normally
+(exit status 0 or 1) and the records file carries the signature of a key
+that only the driver and that session know (:data:`TOKEN_FD`): a submission
+that got out of its worker's walls and forged the file, or killed the
+session, loses its records (and its classmates in the same batch are graded
+again on their own). Workers may not read the submissions, the output folder
+or the course folder.
+
 Submissions and students:
 
 * a notebook given on the command line is one submission; the student is its
@@ -28,6 +36,8 @@ notebooks of one exercise gets one graded (the one named exactly
 ``NN_topic.ipynb``, else the newest); the others are reported.
 """
 
+import hashlib
+import hmac
 import json
 import math
 import os
@@ -44,8 +54,47 @@ from pathlib import Path
 from .paths import exercise_tests, project_root
 from .reports import feedback_markdown, gradescope_results, write_gradebook, write_json
 from .process import library_parent
+from .runner import check_limit
 
-__all__ = ["Unit", "find_submissions", "grade_batch", "grade_unit", "grade", "catalog"]
+__all__ = ["Unit", "find_submissions", "grade_batch", "grade_unit", "grade", "catalog", "read_records",
+           "sign_records", "TOKEN_FD"]
+
+TOKEN_FD = "PARTICLES_GRADING_TOKEN_FD"
+"""Environment variable of a pytest session naming an inherited pipe that holds its signing key.
+
+:func:`grade_batch` makes a new random key per session, writes it into a
+pipe, closes its end and starts pytest with the other end inherited; the
+plugin reads the key at start-up, before any worker exists, closes the pipe
+and signs its records with it (:func:`sign_records`). The key lives only in
+the memory of the driver and of the session: the variable holds a file
+descriptor number, and workers get a clean environment and no inherited
+descriptors (:class:`particles.course.process.Worker`)."""
+
+
+def sign_records(body, token):
+    """The signature of a records file's `body` (str): hex HMAC-SHA256 under the session's key `token` (bytes)."""
+    return hmac.new(token, body.encode("utf-8"), hashlib.sha256).hexdigest()
+
+
+def read_records(path, token):
+    """The submissions of a signed records file (id -> record), or None when it is missing, unsigned or altered.
+
+    Parameters
+    ----------
+    path : path
+        The file the pytest session wrote (``--grading-results``).
+    token : bytes
+        The session's key (see :data:`TOKEN_FD`).
+    """
+    try:
+        signed = json.loads(Path(path).read_text())
+        body, signature = signed["body"], signed["signature"]
+        if not (isinstance(body, str) and isinstance(signature, str)
+                and hmac.compare_digest(sign_records(body, token), signature)):
+            return None
+        return {str(s["id"]): s for s in json.loads(body)["submissions"]}
+    except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError):
+        return None
 
 
 @dataclass
@@ -154,12 +203,12 @@ def catalog(root, exercise, public_only=False, python=None):
             raise RuntimeError(f"cannot collect the tests of {test_file}; run pytest on it to see why") from None
 
 
-def _result(unit, seed, data, status, tests, seconds):
+def _result(unit, seed, data, status, tests, seconds, trouble=None):
     records = list(data.get("tests", []))
     if tests is not None:  # make sure every expected test has a record
         seen = {r["test"] for r in records}
-        why = ("not run: grading of this notebook stopped early (pytest exit status "
-               f"{status}); the instructor has the log")
+        why = (f"not run: grading stopped early ({trouble or f'pytest exit status {status}'}); "
+               "the instructor has the log")
         records += [dict(t, passed=False, reason=why, seed=None) for t in tests if t["test"] not in seen]
     notes = []
     for error in data.get("load_errors", []):
@@ -194,19 +243,37 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
         The exercise's catalog (see :func:`catalog`): tests a notebook has no
         record for are recorded as failed, "not run".
 
+    Notes
+    -----
+    The session's records are trusted only when pytest exited with status 0
+    or 1 (the tests ran to the end) and the records file carries the
+    signature of the session's key (see :data:`TOKEN_FD`); otherwise they are
+    all discarded, and every test of every notebook of the batch is recorded
+    as "not run: grading stopped early" (:func:`grade` then grades each of
+    them again in a session of its own).
+
     Returns
     -------
     list of dict
         Per unit: ``student``, ``exercise``, ``notebook``, ``seed``,
         ``seconds``, ``tests`` (records), ``notes`` (lines about loading the
         notebook), ``complete`` (every test has its own record).
+
+    Raises
+    ------
+    ValueError
+        When the units are of several exercises, or `time_limit` or
+        `memory_mb` is not a finite number > 0.
     """
     root = Path(root)
     if len({u.exercise for u in units}) != 1:
         raise ValueError("a batch must hold notebooks of one exercise")
+    time_limit = None if time_limit is None else check_limit("time_limit", time_limit)
+    memory_mb = None if memory_mb is None else check_limit("memory_mb", memory_mb)
     seeds = [secrets.randbelow(2**31) for _ in units] if seeds is None else [int(s) for s in seeds]
     test_file = exercise_tests(root)[units[0].exercise]
     timeout = timeout or 300 + 120 * len(units)
+    token = secrets.token_bytes(32)  # this session's signing key, never written to a file or an environment
     start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="particles-grade-") as tmp:
         private_dir = Path(tmp) / "grader"
@@ -216,30 +283,44 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
                                      for k, (u, seed) in enumerate(zip(units, seeds))]))
         extra = ["--grading-batch", str(batch), "--grading-results", str(results)]
         extra += ["--public-only"] if public_only else []
-        extra += ["--time-limit", str(time_limit)] if time_limit else []
-        extra += ["--memory-mb", str(memory_mb)] if memory_mb else []
+        extra += ["--time-limit", repr(time_limit)] if time_limit is not None else []
+        extra += ["--memory-mb", str(math.ceil(memory_mb))] if memory_mb is not None else []
         for path in private:
             extra += ["--private", str(path)]
         status, output = None, ""
+        key_in, key_out = os.pipe()
         try:
+            os.write(key_out, token)
+            os.close(key_out)
+            env = dict(_environment(root), **{TOKEN_FD: str(key_in)})
             done = subprocess.run(_pytest_command(python or sys.executable, root, test_file, extra), cwd=tmp,
-                                  env=_environment(root), capture_output=True, text=True, timeout=timeout)
+                                  env=env, capture_output=True, text=True, timeout=timeout, pass_fds=(key_in,))
             status, output = done.returncode, done.stdout + done.stderr
         except subprocess.TimeoutExpired as expired:
             output = f"grading stopped after {timeout} s\n{expired.stdout or ''}"
+        finally:
+            os.close(key_in)
+        # the records count only if the tests ran to the end (exit status 0: all passed, 1: some failed)
+        # and the file is the one the session signed: a submission that escaped its worker could kill
+        # the session after writing records of its own, or rewrite the file
+        data, trouble = {}, None
+        if status not in (0, 1):
+            trouble = f"pytest exit status {status}" if status is not None else f"no result within {timeout} s"
+        else:
+            data = read_records(results, token)
+            if data is None:
+                data, trouble = {}, "the session's records were missing or not the ones it signed"
+        if trouble is not None:
+            output += f"\nparticles grade: records of this session discarded: {trouble}\n"
         if log is not None:
             Path(log).write_text(output)
-        try:
-            data = {s["id"]: s for s in json.loads(results.read_text())["submissions"]}
-        except (OSError, ValueError, KeyError, TypeError):
-            data = {}
     elapsed = time.perf_counter() - start
     if tests is None and any("seconds" not in data.get(str(k), {}) for k in range(len(units))):
         try:
             tests = catalog(root, units[0].exercise, public_only, python)
         except RuntimeError:
             tests = []
-    return [_result(u, seed, data.get(str(k), {}), status, tests, elapsed / len(units))
+    return [_result(u, seed, data.get(str(k), {}), status, tests, elapsed / len(units), trouble)
             for k, (u, seed) in enumerate(zip(units, seeds))]
 
 
@@ -283,12 +364,14 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     seed : int, optional
         Seed of the hidden tests' random parameters (default: a new random
         seed per notebook, recorded in the results).
-    time_limit, memory_mb : optional
-        Per-call time limit (s) and memory (MiB) of the student's code.
+    time_limit, memory_mb : float, optional
+        Per-call time limit (s) of the tests without their own ``time_limit``
+        marker, and memory (MiB) of the student's code; finite and > 0.
     root : path, optional
         The course folder (default: found from the current directory).
     private : sequence of path
-        More paths the submissions may not read.
+        More paths the submissions may not read (on top of the course folder,
+        the submissions given in `paths` and `out`).
     hidden_visibility : str
         Gradescope visibility of hidden tests.
     gradescope : path, optional
@@ -306,7 +389,8 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     Raises
     ------
     ValueError
-        On bad arguments (no exercise tests found, unknown exercise, jobs < 1).
+        On bad arguments (no exercise tests found, unknown exercise, jobs < 1,
+        a `time_limit` or `memory_mb` that is not a finite number > 0).
     """
     root = Path(root).resolve() if root else project_root()
     tests = exercise_tests(root)
@@ -316,10 +400,16 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         raise ValueError(f"unknown exercise {exercise!r}; expected one of {', '.join(map(repr, tests))}")
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
         raise ValueError(f"jobs must be a positive integer, got {jobs!r}")
+    time_limit = None if time_limit is None else check_limit("time_limit", time_limit)
+    memory_mb = None if memory_mb is None else check_limit("memory_mb", memory_mb)
     units, problems = find_submissions(paths, list(tests), exercise)
     if out is not None:
         out = Path(out)
         (out / "logs").mkdir(parents=True, exist_ok=True)
+    # no worker may read the submissions (a classmate's notebook) or what grading writes; a worker gets
+    # its own code from the grader, so it never needs to read its notebook either
+    private = [*map(str, private), *(str(Path(p).resolve()) for p in paths if Path(p).exists())]
+    private += [str(out.resolve())] if out is not None else []
 
     def work(batch):
         k = batches.index(batch)

@@ -17,7 +17,8 @@ Fixtures:
 ``student``
     A :class:`particles.course.runner.Submission` for the notebook being
     graded (one worker per test module, restarted after a crash or a timeout).
-    A ``@pytest.mark.time_limit(seconds)`` marker sets its per-call limit.
+    A ``@pytest.mark.time_limit(seconds)`` marker sets its per-call limit
+    (``--time-limit`` sets the default of the tests without one).
 ``rng``
     A ``numpy.random.Generator`` for hidden tests, seeded from the grading
     seed and the test's name: the same seed reproduces the same parameters.
@@ -31,12 +32,19 @@ copy), ``--grading-seed``, ``--public-only``, ``--grading-results FILE``
 ``--grading-batch FILE`` (several notebooks, each with its own seed, graded
 one after the other in this session, each by its own worker: the pytest
 start-up and the reference library are paid once per batch),
-``--time-limit``, ``--memory-mb``, ``--private PATH`` (more paths the
-submission may not read). Without them, ``pytest tests/exercises`` grades the
-masters, which must score full marks.
+``--time-limit`` (the per-call limit of the tests without a ``time_limit``
+marker: a marker wins), ``--memory-mb``, ``--private PATH`` (more paths the
+submission may not read). Without them, ``pytest tests/exercises`` grades
+the masters, which must score full marks.
+
+When the driver passes a signing key (see
+:data:`particles.course.grading.TOKEN_FD`), the records file holds
+``{"body": JSON text, "signature": HMAC of it}``; the driver trusts it only
+with a valid signature and a pytest exit status of 0 or 1.
 """
 
 import json
+import os
 import re
 import secrets
 import time
@@ -47,10 +55,27 @@ import numpy as np
 import pytest
 
 from .code import SubmissionCode, notebook_cells
+from .grading import TOKEN_FD, sign_records
 from .paths import project_root
-from .runner import GradingFailure, Submission
+from .runner import GradingFailure, Submission, check_limit
 
 __all__ = ["record_of"]
+
+
+def _read_token():
+    fd = os.environ.pop(TOKEN_FD, None)
+    if fd is None:
+        return None
+    chunks = []
+    try:
+        while True:
+            chunk = os.read(int(fd), 4096)
+            if not chunk:
+                break
+            chunks.append(chunk)
+    finally:
+        os.close(int(fd))
+    return b"".join(chunks)
 
 
 def pytest_addoption(parser):
@@ -61,7 +86,8 @@ def pytest_addoption(parser):
                     help="a JSON list of {id, notebook, seed}: grade several notebooks in this session")
     group.addoption("--public-only", action="store_true", default=False, help="run only the public tests")
     group.addoption("--grading-results", default=None, help="write the per-test records as JSON to this file")
-    group.addoption("--time-limit", type=float, default=None, help="default per-call time limit, seconds")
+    group.addoption("--time-limit", type=float, default=None,
+                    help="per-call time limit, seconds, of tests without a time_limit marker")
     group.addoption("--memory-mb", type=int, default=None, help="memory a submission may use, MiB")
     group.addoption("--private", action="append", default=[], help="another path a submission may not read")
     group.addoption("--grading-catalog", default=None, help="write the collected tests (name, points, visibility) here")
@@ -82,6 +108,7 @@ def pytest_configure(config):
     else:
         jobs = [{"id": "0", "notebook": config.getoption("--submission", default=None), "seed": seed}]
     config._particles_jobs = jobs
+    config._particles_token = _read_token()
     config._particles_seed = seed
     config._particles_results = {job["id"]: {"id": job["id"], "seed": job["seed"], "tests": []} for job in jobs}
 
@@ -185,8 +212,8 @@ def student(_particles_submission, request):
     """The submission being graded; ``student.call(name, *args)`` runs its code in the worker."""
     marker = request.node.get_closest_marker("time_limit")
     saved = dict(_particles_submission.limits)
-    if marker is not None and request.config.getoption("--time-limit") is None:
-        _particles_submission.limits["time_limit"] = float(marker.args[0])
+    if marker is not None:  # the test's own limit wins over --time-limit, which is the default of the others
+        _particles_submission.limits["time_limit"] = check_limit("time_limit", marker.args[0])
     yield _particles_submission
     _particles_submission.limits.update(saved)
 
@@ -267,4 +294,9 @@ def pytest_sessionfinish(session):
     if not path:
         return
     data = {"submissions": list(config._particles_results.values())}
-    Path(path).write_text(json.dumps(data, indent=1))
+    token = getattr(config, "_particles_token", None)
+    if token is None:
+        Path(path).write_text(json.dumps(data, indent=1))
+        return
+    body = json.dumps(data, indent=1)  # signed, so that a worker that wrote this file itself is found out
+    Path(path).write_text(json.dumps({"body": body, "signature": sign_records(body, token)}))

@@ -12,6 +12,8 @@ returned something the protocol cannot carry. After a timeout or a crash the
 worker is killed and the next call starts a fresh one.
 """
 
+import math
+import numbers
 import shutil
 import signal
 import tempfile
@@ -23,7 +25,7 @@ from .code import SubmissionCode, read_submission
 from .process import Worker, WorkerDied, WorkerTimeout
 from .protocol import ProtocolError, Unsupported
 
-__all__ = ["GradingFailure", "Submission", "DEFAULTS", "describe_value"]
+__all__ = ["GradingFailure", "Submission", "DEFAULTS", "describe_value", "check_limit"]
 
 DEFAULTS = {
     "time_limit": 5.0,       # seconds of wall-clock time per call
@@ -35,6 +37,32 @@ DEFAULTS = {
 """Default limits of a worker (all settable per grading run; time limits per test too)."""
 
 _GRACE = 2.0  # seconds after a soft time limit before the worker is killed
+
+_UNITS = {"time_limit": "seconds", "load_time_limit": "seconds", "memory_mb": "MiB", "cpu_seconds": "seconds",
+          "file_mb": "MiB"}
+
+
+def check_limit(name, value):
+    """`value` as a float, after checking that it is a finite number > 0.
+
+    Parameters
+    ----------
+    name : str
+        The limit's name, for the message (``"time_limit"``, ``"memory_mb"``, ...).
+    value : int or float
+        The limit.
+
+    Raises
+    ------
+    ValueError
+        Naming the limit, when `value` is not a real number (a bool is not),
+        is infinite or NaN, or is not > 0: a limit of 0 would switch the
+        limit off, a negative one breaks the timer.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value) or value <= 0:
+        unit = _UNITS.get(name)
+        raise ValueError(f"{name} must be a finite number > 0{f' ({unit})' if unit else ''}, got {value!r}")
+    return float(value)
 
 
 class GradingFailure(AssertionError):
@@ -79,9 +107,17 @@ class Submission:
     deny : sequence of path, optional
         Paths the submission may not read (solutions, tests, results).
     time_limit, load_time_limit, memory_mb, cpu_seconds, file_mb : optional
-        Limits, see :data:`DEFAULTS`.
+        Limits, see :data:`DEFAULTS` (``None``: the default); each must be a
+        finite number > 0.
     scratch : path, optional
         Parent of the workers' scratch folders (default: a new temporary folder).
+
+    Raises
+    ------
+    ValueError
+        When a limit is not a finite number > 0 (naming it, see :func:`check_limit`).
+    TypeError
+        On a keyword that is not a limit.
 
     Attributes
     ----------
@@ -98,7 +134,13 @@ class Submission:
         self.code = source if isinstance(source, SubmissionCode) else read_submission(source)
         self.forbidden = dict(forbidden or {})
         self.deny = [str(p) for p in deny]
-        self.limits = dict(DEFAULTS, **{k: v for k, v in limits.items() if v is not None})
+        unknown = sorted(set(limits) - set(DEFAULTS))
+        if unknown:
+            raise TypeError(f"unknown limit {unknown[0]!r}; expected one of {', '.join(DEFAULTS)}")
+        given = {k: v for k, v in limits.items() if v is not None}
+        for key, value in given.items():
+            check_limit(key, value)
+        self.limits = dict(DEFAULTS, **given)
         self._own_scratch = scratch is None
         self.scratch = Path(tempfile.mkdtemp(prefix="particles-grade-") if scratch is None else scratch)
         self.python = python
@@ -230,7 +272,8 @@ class Submission:
             raise GradingFailure(f"`{name}` uses `{used}`{chain}, which this exercise forbids: {self.forbidden[used]}")
         if name not in self.code.defines():
             raise GradingFailure(self._not_defined(name))
-        limit = float(self.limits["time_limit"] if timeout is None else timeout)
+        limit = check_limit("timeout" if timeout is not None else "time_limit",
+                            self.limits["time_limit"] if timeout is None else timeout)
         self._ensure_worker()
         request = {"op": "call", "name": name, "args": list(args), "kwargs": kwargs, "timeout": limit}
         try:

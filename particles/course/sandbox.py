@@ -2,10 +2,11 @@
 
 Used by :mod:`particles.course.worker` before it runs any student code:
 
-* :class:`Policy`, an audit hook (:func:`sys.addaudithook`, which cannot be
-  removed) that refuses reading the grader's private paths, writing outside
-  the scratch folder, starting processes, sockets, signals to other processes,
-  ``ctypes`` and raising resource limits;
+* :class:`Policy`, whose :attr:`Policy.hook` is an audit hook
+  (:func:`sys.addaudithook`, which cannot be removed) that refuses reading the
+  grader's private paths, writing outside the scratch folder, starting
+  processes, sockets, signals to other processes, ``ctypes``, raising resource
+  limits, and the look-ups (:mod:`gc`, tracing) that would reach the hook;
 * :class:`Tripwires`, which replace the library functions an exercise forbids
   by objects that raise ``PermissionError`` when used, as soon as their module
   is imported (and load the plotting modules lazily);
@@ -13,10 +14,18 @@ Used by :mod:`particles.course.worker` before it runs any student code:
 
 Python offers no real sandbox inside one process: these walls stop honest
 mistakes and the usual tricks, and they give a clear reason when they do.
-The grader's verdict never depends on them: it is computed in another process
-from the data the worker returns.
+They are a wall against accidents and casual cheating, not a security
+boundary against a determined attacker (code running in the worker can reach
+the worker's own objects by enough introspection). The audit hook and the
+tripwires keep their state in closures and read-only copies, so the one-line
+tricks (``Policy.__call__ = ...``, ``WIRES.targets``) no longer switch them
+off. The grader's verdict never depends on them: it is computed in another
+process from the data the worker returns, and the records of a pytest session
+count only when they carry that session's signature (see
+:mod:`particles.course.grading`).
 """
 
+import math
 import os
 import signal
 import sys
@@ -60,61 +69,167 @@ _PATH_EVENTS = {  # events whose listed argument positions are paths that must l
 }
 
 
-class Policy:
-    """What the audit hook allows: decided on real paths, longest prefix wins."""
+_INTROSPECTION_EVENTS = {  # events that would reach the worker's own objects (the audit hook, the tripwires)
+    "gc.get_objects": "inspect the grader's objects",
+    "gc.get_referrers": "inspect the grader's objects",
+    "gc.get_referents": "inspect the grader's objects",
+    "sys.settrace": "trace the grader's code",
+    "sys.setprofile": "trace the grader's code",
+}
 
-    def __init__(self, scratch, deny, allow):
+
+def _under(path, root):
+    return path == root or path.startswith(root.rstrip(os.sep) + os.sep)
+
+
+def _make_hook(scratch, rules, finder=None):
+    """The audit hook: a function that looks nothing up when it is called.
+
+    Every object it uses is bound as a default argument when it is made
+    (immutable tuples and read-only mappings, the functions of :mod:`os.path`
+    and the built-ins it calls), so that replacing :class:`Policy`, its
+    methods, this module's globals or a built-in later does not change what it
+    allows. Changing the hook's own attributes (``__defaults__``, ``__code__``)
+    is refused, and so are the :mod:`gc` look-ups that would find it.
+    """
+    sep = os.sep
+    rules = tuple((root, root.rstrip(sep) + sep, allowed) for root, allowed in rules)
+    scratch_prefix = scratch.rstrip(sep) + sep
+    denied = types.MappingProxyType(dict(_DENIED_EVENTS, **_INTROSPECTION_EVENTS))
+    path_events = types.MappingProxyType(dict(_PATH_EVENTS))
+
+    trusted = () if finder is None else (_WiringLoader.exec_module.__code__, LazyPackage.__getattr__.__code__)
+    library = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + sep  # the particles package
+
+    def hook(event, args, scratch=scratch, scratch_prefix=scratch_prefix, rules=rules, denied=denied,
+             path_events=path_events, trusted=trusted, library=library, getframe=sys._getframe,
+             CodeType=types.CodeType, write_flags=_WRITE_FLAGS, devnull=os.devnull,
+             realpath=os.path.realpath, abspath=os.path.abspath, fsdecode=os.fsdecode, isinstance=isinstance,
+             len=len, any=any, str=str, bytes=bytes, int=int, tuple=tuple, list=list, type=type,
+             PathLike=os.PathLike, FunctionType=types.FunctionType, PermissionError=PermissionError):
+        def real(path):
+            if isinstance(path, bytes):
+                path = fsdecode(path)
+            return realpath(abspath(path))
+
+        def may_read(path):
+            for root, prefix, allowed in rules:
+                if path == root or path.startswith(prefix):
+                    return allowed
+            return True
+
+        def may_write(path):
+            return path == scratch or path.startswith(scratch_prefix) or path == devnull
+
+        if event == "open":
+            path, mode, flags = (tuple(args) + (None, None, None))[:3]
+            if path is None or isinstance(path, int):
+                return
+            path_real = real(path)
+            writing = (isinstance(mode, str) and any(c in mode for c in "wax+")) or (
+                mode is None and isinstance(flags, int) and flags & write_flags
+            )
+            if writing and not may_write(path_real):
+                raise PermissionError(f"the grader does not let submissions write outside their working directory ({path})")
+            if not writing and not may_read(path_real):
+                raise PermissionError(f"the grader does not let submissions read its private files ({path})")
+        elif event in ("os.listdir", "os.scandir"):
+            if args and args[0] is not None and not isinstance(args[0], int) and not may_read(real(args[0])):
+                raise PermissionError(f"the grader does not let submissions list its private folders ({args[0]})")
+        elif event in denied or event.startswith("ctypes."):
+            what = denied.get(event, "use ctypes")
+            raise PermissionError(f"the grader does not let submissions {what} ({event})")
+        elif event in path_events:
+            for k in path_events[event]:
+                if k < len(args) and isinstance(args[k], (str, bytes, PathLike)) and not may_write(real(args[k])):
+                    raise PermissionError(f"the grader does not let submissions change files outside their working directory ({args[k]})")
+        elif event in ("object.__setattr__", "object.__delattr__"):
+            target = args[0] if args else None
+            if type(target) is FunctionType and str(target.__module__).startswith("particles.course"):
+                raise PermissionError(f"the grader does not let submissions change its own functions ({event})")
+        elif event == "exec" and trusted and args and isinstance(args[0], CodeType):
+            filename = args[0].co_filename
+            if isinstance(filename, str) and filename.startswith(library):
+                # a module of the library runs: only its loaders that wire tripwires may run it
+                frame, depth = getframe(1), 0
+                while frame is not None and depth < 12 and frame.f_code not in trusted:
+                    frame, depth = frame.f_back, depth + 1
+                if frame is None or depth >= 12:
+                    raise PermissionError("the grader does not let submissions load the library past its tripwires "
+                                          f"(another finder in sys.meta_path, or a loader of their own): {filename}")
+
+    return hook
+
+
+class Policy:
+    """What the audit hook allows: decided on real paths, longest prefix wins.
+
+    Parameters
+    ----------
+    scratch : path
+        The only folder the submission may write in.
+    deny, allow : sequence of path
+        Folders (or files) it may not read, and exceptions inside them: of
+        the rules that hold a path, the longest decides.
+    finder : Tripwires, optional
+        The worker's tripwires: when given, a module of the library may run
+        only from the loaders that wire them (not after another finder was
+        put first in ``sys.meta_path``, not from a loader of the submission).
+
+    Notes
+    -----
+    :attr:`hook` is the function to give to :func:`sys.addaudithook`; it is
+    built once, from copies of the rules, and does not call this object, so
+    replacing ``Policy.__call__`` or the rules afterwards changes nothing.
+
+    The audit hook is a wall against accidents and casual cheating (reading
+    the solutions or a classmate's notebook, writing fake results, starting
+    programs), not a security boundary against a determined attacker: code
+    that runs inside a Python process can always reach that process's
+    objects by enough introspection. What makes grades trustworthy is that
+    the verdict is computed outside the worker (see
+    :mod:`particles.course.grading`).
+    """
+
+    def __init__(self, scratch, deny, allow, finder=None):
         self.scratch = os.path.realpath(scratch)
         self.rules = sorted(
             [(os.path.realpath(p), False) for p in deny] + [(os.path.realpath(p), True) for p in allow],
             key=lambda rule: len(rule[0]), reverse=True,
         )
+        self.hook = _make_hook(self.scratch, self.rules, finder)
 
     @staticmethod
     def _under(path, root):
-        return path == root or path.startswith(root.rstrip(os.sep) + os.sep)
+        return _under(path, root)
 
     def may_read(self, path):
+        """Whether the submission may read the real path `path` (by the rules given at construction)."""
         for root, allowed in self.rules:
-            if self._under(path, root):
+            if _under(path, root):
                 return allowed
         return True
 
     def may_write(self, path):
-        return self._under(path, self.scratch) or path == os.devnull
+        """Whether the submission may write the real path `path` (only in its scratch folder)."""
+        return _under(path, self.scratch) or path == os.devnull
 
     def real(self, path):
+        """The real, absolute form of `path` (str or bytes)."""
         if isinstance(path, bytes):
             path = os.fsdecode(path)
         return os.path.realpath(os.path.abspath(path))
 
     def __call__(self, event, args):
-        if event == "open":
-            path, mode, flags = (tuple(args) + (None, None, None))[:3]
-            if path is None or isinstance(path, int):
-                return
-            real = self.real(path)
-            writing = (isinstance(mode, str) and any(c in mode for c in "wax+")) or (
-                mode is None and isinstance(flags, int) and flags & _WRITE_FLAGS
-            )
-            if writing and not self.may_write(real):
-                raise PermissionError(f"the grader does not let submissions write outside their working directory ({path})")
-            if not writing and not self.may_read(real):
-                raise PermissionError(f"the grader does not let submissions read its private files ({path})")
-        elif event in ("os.listdir", "os.scandir"):
-            if args and args[0] is not None and not isinstance(args[0], int) and not self.may_read(self.real(args[0])):
-                raise PermissionError(f"the grader does not let submissions list its private folders ({args[0]})")
-        elif event in _DENIED_EVENTS or event.startswith("ctypes."):
-            what = _DENIED_EVENTS.get(event, "use ctypes")
-            raise PermissionError(f"the grader does not let submissions {what} ({event})")
-        elif event in _PATH_EVENTS:
-            for k in _PATH_EVENTS[event]:
-                if k < len(args) and isinstance(args[k], (str, bytes, os.PathLike)) and not self.may_write(self.real(args[k])):
-                    raise PermissionError(f"the grader does not let submissions change files outside their working directory ({args[k]})")
+        self.hook(event, args)
 
 
 class _Tripwire:
     """Stands in for a forbidden library object: any use raises PermissionError.
+
+    Each tripwire is an instance of its own subclass, made by :func:`_tripwire`,
+    whose methods hold what they need in a closure: the tripwire keeps no
+    attribute that leads back to the object it replaces.
 
     A forbidden *class* may still be a base class or the second argument of
     ``isinstance`` (``__mro_entries__``, ``__instancecheck__``): the library
@@ -124,33 +239,89 @@ class _Tripwire:
     :mod:`particles.course.forbidden` reports.
     """
 
-    def __init__(self, name, reason, original=None):
-        self._name, self._reason = name, reason
-        self._original = original if isinstance(original, type) else None
+    __slots__ = ()
 
-    def __mro_entries__(self, bases):
-        if self._original is None:
-            self._fail()
-        return (self._original,)
 
-    def __instancecheck__(self, instance):
-        return self._original is not None and isinstance(instance, self._original)
+def _tripwire(name, reason, original=None):
+    """A :class:`_Tripwire` for the library object `name`, forbidden because of `reason`."""
+    base = original if isinstance(original, type) else None
+    message = f"{name} is not allowed in this exercise: {reason}"
 
-    def __subclasscheck__(self, cls):
-        return self._original is not None and issubclass(cls, self._original)
+    def fail(*args, **kwargs):
+        raise PermissionError(message)
 
-    def _fail(self, *args, **kwargs):
-        raise PermissionError(f"{self._name} is not allowed in this exercise: {self._reason}")
+    class Tripwire(_Tripwire):
+        __slots__ = ()
 
-    __call__ = __getitem__ = __iter__ = __len__ = __contains__ = _fail
+        def __mro_entries__(self, bases):
+            if base is None:
+                fail()
+            return (base,)
 
-    def __getattr__(self, name):
-        if name.startswith("_"):
-            raise AttributeError(name)
-        self._fail()
+        def __instancecheck__(self, instance):
+            return base is not None and isinstance(instance, base)
 
-    def __repr__(self):
-        return f"<forbidden {self._name}>"
+        def __subclasscheck__(self, cls):
+            return base is not None and issubclass(cls, base)
+
+        __call__ = __getitem__ = __iter__ = __len__ = __contains__ = fail
+
+        def __getattr__(self, attr):
+            if attr.startswith("_"):
+                raise AttributeError(attr)
+            fail()
+
+        def __repr__(self):
+            return f"<forbidden {name}>"
+
+    Tripwire.__name__ = Tripwire.__qualname__ = "_Tripwire"
+    return Tripwire()
+
+
+def _wiring(forbidden):
+    """The ``wire`` function of a :class:`Tripwires`, and the state it keeps in its closure.
+
+    Replaced objects are known by their ids only; a weak reference to each
+    forgets its id when it is freed, so that a new object that happens to get
+    the same id is never mistaken for it (objects without weak references are
+    kept alive instead).
+    """
+    import weakref
+
+    forbidden = tuple(dict(forbidden).items())
+    wired = {}  # id(original) -> its tripwire
+    kept = []   # originals that do not support weak references, kept so that their ids stay unique
+    watchers = []
+
+    def forget(key):
+        return lambda _ref: wired.pop(key, None)
+
+    def wire():
+        library = [m for n, m in list(sys.modules.items()) if n == "particles" or n.startswith("particles.")]
+        for name, reason in forbidden:
+            module_name, _, attr = name.rpartition(".")
+            module = sys.modules.get(module_name)
+            value = vars(module).get(attr) if module is not None else None
+            if value is None or isinstance(value, _Tripwire) or id(value) in wired:
+                continue
+            key = id(value)
+            wired[key] = _tripwire(name, reason, value)
+            try:
+                watchers.append(weakref.ref(value, forget(key)))
+            except TypeError:
+                kept.append(value)
+        if not wired:
+            return
+        for module in library:  # a loop over modules and their attributes, not over particles
+            for key, value in list(vars(module).items()):
+                if id(value) in wired:
+                    setattr(module, key, wired[id(value)])
+                elif type(value) is dict and not key.startswith("__"):
+                    for k, v in list(value.items()):
+                        if id(v) in wired:
+                            value[k] = wired[id(v)]
+
+    return wire
 
 
 class Tripwires:
@@ -162,70 +333,79 @@ class Tripwires:
     in the library's modules and their dicts (``INTEGRATORS``), are swapped for
     tripwires. Modules nobody imports are never loaded, so a worker starts
     with NumPy only.
+
+    Parameters
+    ----------
+    forbidden : dict
+        Dotted library name -> why it is forbidden.
+
+    Notes
+    -----
+    ``Tripwires(forbidden)`` returns an instance of a subclass made for it,
+    without attributes: its ``wire`` and ``find_spec`` keep their state (the
+    ids of the replaced objects, whether a look-up is under way) in closures,
+    out of easy reach of the submission. Like the audit hook, this stops
+    honest mistakes and casual look-ups, not a determined attacker; the
+    syntax-tree check of :mod:`particles.course.forbidden` comes first.
     """
 
-    def __init__(self, forbidden):
-        self.forbidden = dict(forbidden)
-        self.targets = {}  # id(original) -> (original, tripwire); the original is kept so its id stays unique
-        self.busy = False
+    __slots__ = ()
+
+    def __new__(cls, forbidden):
+        wire = _wiring(forbidden)
+        busy = []
+
+        def find_spec(fullname, path=None, target=None):
+            if busy or not (fullname.startswith("particles.") or fullname in _LAZY):
+                return None
+            busy.append(True)
+            try:
+                for finder in sys.meta_path:
+                    if finder is self or not hasattr(finder, "find_spec"):
+                        continue
+                    spec = finder.find_spec(fullname, path, target)
+                    if spec is not None:
+                        break
+                else:
+                    return None
+            finally:
+                busy.clear()
+            if spec.loader is None:
+                return spec
+            if fullname in _LAZY:
+                import importlib.util
+
+                spec.loader = importlib.util.LazyLoader(spec.loader)
+            else:
+                spec.loader = _WiringLoader(spec.loader, wire)
+            return spec
+
+        made = type(cls.__name__, (cls,), {"__slots__": (), "__module__": cls.__module__,
+                                           "wire": staticmethod(wire), "find_spec": staticmethod(find_spec)})
+        self = object.__new__(made)
+        return self
 
     def wire(self):
-        library = [m for n, m in list(sys.modules.items()) if n == "particles" or n.startswith("particles.")]
-        for name, reason in self.forbidden.items():
-            module_name, _, attr = name.rpartition(".")
-            module = sys.modules.get(module_name)
-            value = vars(module).get(attr) if module is not None else None
-            if value is not None and not isinstance(value, _Tripwire) and id(value) not in self.targets:
-                self.targets[id(value)] = (value, _Tripwire(name, reason, value))
-        if not self.targets:
-            return
-        for module in library:  # a loop over modules and their attributes, not over particles
-            for key, value in list(vars(module).items()):
-                if id(value) in self.targets:
-                    setattr(module, key, self.targets[id(value)][1])
-                elif type(value) is dict and not key.startswith("__"):
-                    for k, v in list(value.items()):
-                        if id(v) in self.targets:
-                            value[k] = self.targets[id(v)][1]
+        """Swap the forbidden objects of the modules loaded so far for tripwires."""
+        raise NotImplementedError  # replaced per instance (see __new__)
 
     def find_spec(self, fullname, path=None, target=None):
-        if self.busy or not (fullname.startswith("particles.") or fullname in _LAZY):
-            return None
-        self.busy = True
-        try:
-            for finder in sys.meta_path:
-                if finder is self or not hasattr(finder, "find_spec"):
-                    continue
-                spec = finder.find_spec(fullname, path, target)
-                if spec is not None:
-                    break
-            else:
-                return None
-        finally:
-            self.busy = False
-        if spec.loader is None:
-            return spec
-        if fullname in _LAZY:
-            import importlib.util
-
-            spec.loader = importlib.util.LazyLoader(spec.loader)
-        else:
-            spec.loader = _WiringLoader(spec.loader, self)
-        return spec
+        """The meta-path finder's look-up: the usual spec, with a loader that wires after loading."""
+        raise NotImplementedError  # replaced per instance (see __new__)
 
 
 class _WiringLoader:
     """A module loader that wires tripwires after the module ran."""
 
-    def __init__(self, loader, wires):
-        self._loader, self._wires = loader, wires
+    def __init__(self, loader, wire):
+        self._loader, self._wire = loader, wire
 
     def create_module(self, spec):
         return self._loader.create_module(spec)
 
     def exec_module(self, module):
         self._loader.exec_module(module)
-        self._wires.wire()
+        self._wire()
 
     def __getattr__(self, name):  # get_source, get_filename, ... for tracebacks and inspect
         return getattr(self._loader, name)
@@ -265,6 +445,28 @@ def _memory_in_use():
 
 
 def set_limits(memory_mb, cpu_seconds, file_mb):
+    """Lower this process's resource limits (the worker calls it before any student code runs).
+
+    Parameters
+    ----------
+    memory_mb : float or None
+        Address space the process may add to what it uses now, MiB
+        (``RLIMIT_AS``); a failed allocation then raises ``MemoryError``.
+    cpu_seconds : float or None
+        CPU time of the whole process, s (``RLIMIT_CPU``): a backstop that
+        ends the process with ``SIGXCPU`` if the grader's own timeouts failed.
+    file_mb : float or None
+        Largest file the process may write, MiB (``RLIMIT_FSIZE``); a larger
+        write fails with ``OSError`` (``SIGXFSZ`` is ignored).
+
+    Notes
+    -----
+    ``None`` (or 0) leaves that limit as it is; core files are always
+    disabled. A limit the system refuses is skipped silently: the grader's
+    per-call timeouts and the worker being a separate process still hold.
+    Raising the limits again later is refused by the audit hook
+    (``resource.setrlimit``).
+    """
     import resource
 
     def limit(kind, value):
@@ -274,10 +476,10 @@ def set_limits(memory_mb, cpu_seconds, file_mb):
             pass
 
     if memory_mb:
-        limit(resource.RLIMIT_AS, _memory_in_use() + int(memory_mb) * 2**20)
+        limit(resource.RLIMIT_AS, _memory_in_use() + int(float(memory_mb) * 2**20))
     if cpu_seconds:
-        limit(resource.RLIMIT_CPU, int(cpu_seconds))
+        limit(resource.RLIMIT_CPU, max(1, math.ceil(cpu_seconds)))
     if file_mb:
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a too-large write fails with OSError instead of killing
-        limit(resource.RLIMIT_FSIZE, int(file_mb) * 2**20)
+        limit(resource.RLIMIT_FSIZE, int(float(file_mb) * 2**20))
     limit(resource.RLIMIT_CORE, 0)

@@ -24,7 +24,9 @@ the walls themselves live in :mod:`particles.course.sandbox`:
    the grader's private paths (the project, tests, solutions, results, and
    ``/proc`` of other processes, e.g. the grader's memory), writing
    outside the scratch directory, starting processes, sockets, signals to other
-   processes, ``ctypes``, and raising resource limits.
+   processes, ``ctypes``, raising resource limits, the :mod:`gc` and tracing
+   look-ups that would reach the hook, and running a module of the library
+   past the tripwires (from another finder or a loader of its own).
 
 Then it serves requests: ``load`` (execute the selected statements of the
 notebook, each under a time limit) and ``call`` (call a function the
@@ -237,9 +239,9 @@ def main(argv=None):
         config = read_frame(server.read_exactly)
     except EOFError:
         return 0
-    sandbox.WIRES = sandbox.Tripwires(config.get("forbidden", {}))
-    sys.meta_path.insert(0, sandbox.WIRES)
-    sandbox.WIRES.wire()
+    wires = sandbox.WIRES = sandbox.Tripwires(config.get("forbidden", {}))
+    sys.meta_path.insert(0, wires)
+    wires.wire()
     sandbox.set_limits(config.get("memory_mb"), config.get("cpu_seconds"), config.get("file_mb"))
     scratch = config["scratch"]
     os.chdir(scratch)
@@ -251,8 +253,10 @@ def main(argv=None):
     allow += [os.path.dirname(os.__file__)]
     # /proc of other processes would show the grader's memory and environment; its own is fine
     allow += [f"/proc/{os.getpid()}", "/proc/meminfo", "/proc/cpuinfo"]
-    policy = sandbox.Policy(scratch, list(config.get("deny", [])) + ["/proc"], allow)
-    sys.addaudithook(policy)  # from here on, until the process ends
+    allow += [scratch]  # its own folder, even when a denied folder holds it
+    # the hook is a function built from copies of the rules: replacing Policy or its methods later changes nothing
+    sys.addaudithook(sandbox.Policy(scratch, list(config.get("deny", [])) + ["/proc"], allow, finder=wires).hook)
+    del wires
     write_frame(proto_out, {"ok": True, "pid": os.getpid()})
     server.serve()
     return 0

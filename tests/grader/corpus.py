@@ -350,6 +350,91 @@ def euler_step(f, X, t, h):
 """},
         "fails": {"test_euler_step_circle": "raised RecursionError"},
     },
+    "disables_the_audit_hook_and_forges_the_records": {  # /tmp/audit_5/forge.py of the audit
+        "replace": {"euler_step": """
+import json, os, re, signal, sys
+
+def euler_step(f, X, t, h):
+    sys.modules["particles.course.sandbox"].Policy.__call__ = lambda self, event, args: None
+    argv = [a.decode() for a in open(f"/proc/{os.getppid()}/cmdline", "rb").read().split(b"\\0")]
+    results = argv[argv.index("--grading-results") + 1]
+    batch = json.load(open(argv[argv.index("--grading-batch") + 1]))
+    names = re.findall(r"def (test_\\w+)\\(", open(next(a for a in argv if a.endswith(".py"))).read())
+    tests = [{"test": n, "name": n, "points": 2.0, "hidden": False, "passed": True, "reason": "",
+              "grader_error": False, "seconds": 0.01, "seed": None} for n in names]
+    fake = {"submissions": [{"id": j["id"], "seed": j["seed"], "tests": tests, "seconds": 1.0} for j in batch]}
+    open(results, "w").write(json.dumps(fake))
+    os.kill(os.getppid(), signal.SIGKILL)
+    return X
+"""},
+        # replacing Policy.__call__ does not switch the audit hook off: /proc of the grader stays private
+        "fails": {"test_euler_step_circle": "read its private files (/proc/"},
+        "passes": ["test_total_force_three_particles"],
+    },
+    "disables_the_audit_hook_and_reads_the_master": {  # /tmp/audit_5/bypass.py of the audit
+        "replace": {"euler_step": """
+import json, pathlib, sys
+import particles
+
+def euler_step(f, X, t, h):
+    sys.modules["particles.course.sandbox"].Policy.__call__ = lambda self, event, args: None
+    master = pathlib.Path(particles.__file__).resolve().parents[1] / "solutions" / "00_warmup.ipynb"
+    cells = json.loads(master.read_text())["cells"]
+    namespace = {"np": np}
+    exec("".join(cells[3]["source"]), namespace)
+    return namespace["euler_step"](f, X, t, h)
+"""},
+        "fails": {"test_euler_step_circle": "read its private files"},
+        "passes": ["test_total_force_three_particles"],
+    },
+    "finds_the_hook_with_gc": {
+        "replace": {"euler_step": """
+import gc
+
+def euler_step(f, X, t, h):
+    hooks = [o for o in gc.get_objects() if getattr(o, "__name__", "") == "hook"]
+    return X + h * f(X, t) * len(hooks)
+"""},
+        "fails": {"test_euler_step_circle": "inspect the grader's objects (gc.get_objects)"},
+    },
+    "takes_the_original_from_the_tripwires": {  # /tmp/audit_5/wires.py of the audit
+        "replace": {"euler_step": """
+import importlib, sys
+
+def euler_step(f, X, t, h):
+    module = importlib.import_module("particles." + "integrators")
+    wires = sys.modules["particles.course.sandbox"].WIRES
+    real = getattr(module, "eu" + "ler")._original
+    return real(f, X, t, h)
+"""},
+        "fails": {"test_euler_step_circle": "raised AttributeError"},
+    },
+    "imports_the_library_past_the_tripwires": {
+        "replace": {"euler_step": """
+import importlib, sys
+
+def euler_step(f, X, t, h):
+    sys.meta_path[:] = [finder for finder in sys.meta_path if "Tripwires" not in type(finder).__name__]
+    sys.modules.pop("particles." + "integrators", None)   # loaded (and wired) by the first cell: load it again
+    module = importlib.import_module("particles." + "integrators")
+    return getattr(module, "eu" + "ler")(f, X, t, h)
+"""},
+        "fails": {"test_euler_step_circle": "load the library past its tripwires"},
+    },
+    "loads_the_library_with_a_loader_of_its_own": {
+        "replace": {"euler_step": """
+import importlib.util
+import particles
+
+def euler_step(f, X, t, h):
+    path = particles.__path__[0] + "/integrators.py"
+    spec = importlib.util.spec_from_file_location("my_integrators", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.euler(f, X, t, h)
+"""},
+        "fails": {"test_euler_step_circle": "load the library past its tripwires"},
+    },
 }
 
 CORRECT = {
