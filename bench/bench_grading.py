@@ -1,10 +1,14 @@
 """Grading throughput: 50 submissions with --jobs 1 and with --jobs 2.
 
-Each submission is graded by its own pytest process and worker, so grading is
-embarrassingly parallel; on a 2-core machine two jobs should approach a 2x
-speed-up. The 50 notebooks are a mix from the grader's corpus (correct
-variants, the master, the stub and quick-failing wrong answers; no timeouts,
-which would measure sleeping rather than grading).
+Submissions of one exercise are graded in batches: one pytest process per
+batch (its start-up and the reference library are paid once per batch), and
+one worker process per submission inside it. ``grade`` splits the notebooks
+of an exercise into about six batches (three per job, counting at least two
+jobs) of at most 20, so the batches are independent and two jobs on a 2-core
+machine should approach a 2x speed-up. The 50 notebooks are a mix from the
+grader's corpus (correct variants, the master, the stub and quick-failing
+wrong answers; no timeouts, which would measure sleeping rather than
+grading).
 
 The machine is shared: the script interleaves the two settings, keeps the
 best of each, and prints the CPU time of the graders so that a low speed-up

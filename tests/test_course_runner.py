@@ -192,6 +192,13 @@ def test_nap_marked(student):
 def test_nap_default(student):
     """A test without one: --time-limit is its limit."""
     assert student.call("nap", 1.0) == 1.0
+
+
+def test_the_worker_gets_no_key(student):
+    """The worker's environment and open files hold neither the session's signing key nor its pipe."""
+    names, fds = student.call("environment")
+    assert [n for n in names if "PARTICLES" in n or "TOKEN" in n] == [], names
+    assert fds == [0, 1, 2, 3, 4, 5], fds  # /dev/null, its output file twice, the two protocol pipes, listdir's
 '''
 
 
@@ -202,7 +209,8 @@ def _echo_course(tmp_path, students):
     (root / "tests" / "exercises" / "test_98_echo.py").write_text(ECHO_TESTS)
     subs = tmp_path / "subs"
     for name, body in students.items():
-        source = f"import time\n\ndef echo(x):\n    {body}\n\ndef nap(s):\n    time.sleep(s)\n    return s"
+        source = (f"import os, time\n\ndef echo(x):\n    {body}\n\ndef nap(s):\n    time.sleep(s)\n    return s\n\n"
+                  "def environment():\n    return sorted(os.environ), sorted(int(fd) for fd in os.listdir('/proc/self/fd'))")
         nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(source)])
         (subs / name).mkdir(parents=True)
         nbformat.write(nb, str(subs / name / "98_echo.ipynb"))
@@ -221,7 +229,7 @@ def test_records_of_a_killed_or_forged_session_are_discarded(tmp_path, monkeypat
     assert all(t["passed"] for t in tests["good"].values()), tests["good"]
     for student, why in (("killer", "pytest exit status -9"),
                          ("forger", "the session's records were missing or not the ones it signed")):
-        assert len(tests[student]) == 3 and not any(t["passed"] for t in tests[student].values()), tests[student]
+        assert len(tests[student]) == 4 and not any(t["passed"] for t in tests[student].values()), tests[student]
         assert all(t["reason"].startswith(f"not run: grading stopped early ({why})")
                    for t in tests[student].values()), tests[student]
     logs = sorted(p.name for p in (tmp_path / "out" / "logs").iterdir())
@@ -253,6 +261,7 @@ def test_a_time_limit_marker_wins_over_the_default(tmp_path):
     tests = {t["test"]: t for t in summary["students"]["good"][0]["tests"]}
     assert tests["test_nap_marked"]["passed"], tests["test_nap_marked"]["reason"]
     assert "did not finish within 0.5 s" in tests["test_nap_default"]["reason"]
+    assert tests["test_the_worker_gets_no_key"]["passed"], tests["test_the_worker_gets_no_key"]["reason"]
 
 
 def test_a_submission_cannot_read_a_classmates_notebook_or_the_grades(tmp_path):
