@@ -57,7 +57,7 @@ from .process import library_parent
 from .runner import check_limit
 
 __all__ = ["Unit", "find_submissions", "grade_batch", "grade_unit", "grade", "catalog", "read_records",
-           "sign_records", "TOKEN_FD"]
+           "sign_records", "TOKEN_FD", "written_answers"]
 
 TOKEN_FD = "PARTICLES_GRADING_TOKEN_FD"
 """Environment variable of a pytest session naming an inherited pipe that holds its signing key.
@@ -203,7 +203,31 @@ def catalog(root, exercise, public_only=False, python=None):
             raise RuntimeError(f"cannot collect the tests of {test_file}; run pytest on it to see why") from None
 
 
-def _result(unit, seed, data, status, tests, seconds, trouble=None):
+def _answer_prompts(notebook):
+    """Markdown cells of a notebook that still hold the release's answer prompt (0 if unreadable)."""
+    from .release import ANSWER_PROMPT
+
+    try:
+        cells = json.loads(Path(notebook).read_text(encoding="utf-8")).get("cells", [])
+        sources = ["".join(c.get("source", "")) if isinstance(c.get("source"), list) else str(c.get("source", ""))
+                   for c in cells if isinstance(c, dict) and c.get("cell_type") == "markdown"]
+    except (OSError, UnicodeDecodeError, ValueError, AttributeError, TypeError):
+        return 0
+    return sum(source.count(ANSWER_PROMPT) for source in sources)
+
+
+def written_answers(notebook, root, exercise):
+    """The written (hand-graded) answers of a submission: ``{"asked": M, "answered": k}``.
+
+    ``asked`` counts the answer prompts of the released ``exercises/NN_topic.ipynb``;
+    a prompt still present in the submission is unanswered. The autograder does
+    not score these answers: the count tells the instructor what is left to read.
+    """
+    asked = _answer_prompts(Path(root) / "exercises" / f"{exercise}.ipynb")
+    return {"asked": asked, "answered": max(asked - _answer_prompts(notebook), 0)}
+
+
+def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None):
     records = list(data.get("tests", []))
     if tests is not None:  # make sure every expected test has a record
         seen = {r["test"] for r in records}
@@ -220,9 +244,13 @@ def _result(unit, seed, data, status, tests, seconds, trouble=None):
     if data.get("restarts", 1) > 1:
         notes.append(f"The worker running your code was restarted {data['restarts'] - 1} time(s) "
                      "after a timeout or a crash")
+    written = written_answers(unit.notebook, root, unit.exercise) if root is not None else None
+    if written and written["asked"]:
+        notes.append(f"Written answers: {written['answered']} of {written['asked']} filled in; they are read "
+                     "and graded by your instructor, not by the autograder")
     return {"student": unit.student, "exercise": unit.exercise, "notebook": str(unit.notebook), "seed": seed,
             "seconds": round(data.get("seconds", seconds), 2), "tests": records, "notes": notes,
-            "grader_status": status, "complete": "seconds" in data}
+            "written_answers": written, "grader_status": status, "complete": "seconds" in data}
 
 
 def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, memory_mb=None, private=(),
@@ -320,7 +348,7 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
             tests = catalog(root, units[0].exercise, public_only, python)
         except RuntimeError:
             tests = []
-    return [_result(u, seed, data.get(str(k), {}), status, tests, elapsed / len(units), trouble)
+    return [_result(u, seed, data.get(str(k), {}), status, tests, elapsed / len(units), trouble, root)
             for k, (u, seed) in enumerate(zip(units, seeds))]
 
 

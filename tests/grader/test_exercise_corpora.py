@@ -92,3 +92,15 @@ def test_every_test_has_its_own_name(graded, exercise):
     names = [t["name"] for t in _tests(graded, exercise, "master").values()]
     assert len(set(names)) == len(names), sorted(n for n in names if names.count(n) > 1)
     assert not [n for n in names if "__job" in n], "the batch parameter leaked into a test name"
+
+
+@pytest.mark.parametrize("exercise", EXERCISES)
+def test_written_answers_are_counted_for_the_instructor(graded, exercise):
+    """The record says how many written answers were filled in: all in the master, none in the stub."""
+    (master,) = graded["summary"]["students"][f"{exercise}__master"]
+    (stub,) = graded["summary"]["students"][f"{exercise}__released_stub"]
+    asked = stub["written_answers"]["asked"]
+    assert asked >= 1
+    assert master["written_answers"] == {"asked": asked, "answered": asked}
+    assert stub["written_answers"] == {"asked": asked, "answered": 0}
+    assert any(f"Written answers: 0 of {asked} filled in" in note for note in stub["notes"])
