@@ -198,6 +198,18 @@ def test_point_pins_concentrate_strain_under_refinement():
 
 
 def test_cloth_damping_and_wind_options():
+    """Viscous damping is per unit mass under physical scaling (F = -damping m v), per particle under naive;
+    wind adds its force; at rest the pins carry weight plus wind."""
+    rng = np.random.default_rng(3)
+    for scaling, per_mass in (("physical", True), ("naive", False)):
+        c = cloth(5, 5, damping=0.3, gravity=0.0, scaling=scaling)
+        X = c.state()
+        X[:, 1] = rng.normal(size=(c.n, 3))
+        free = np.setdiff1d(np.arange(c.n), c.pinned)
+        springs_only = cloth(5, 5, damping=0.0, gravity=0.0, scaling=scaling).total_force(X, 0.0)
+        drag = c.total_force(X, 0.0) - springs_only
+        expected = -0.3 * (c.m[:, None] if per_mass else 1.0) * X[:, 1]
+        np.testing.assert_allclose(drag[free], expected[free], atol=1e-12)
     c = cloth(5, 5, damping=0.3, wind=[1.0, 0.0, 0.0], scaling="physical")
     F = c.total_force(c.state(), 0.0)
     weight = c.m[:, None] * np.array([0.0, 0.0, -g])

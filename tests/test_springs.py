@@ -51,6 +51,15 @@ def test_rest_length_defaults_to_current_distance():
 
 
 @pytest.mark.parametrize("d", [2, 3])
+def test_damped_springs_conserve_momentum(d):
+    """With damping along the springs the forces are still equal and opposite: no net force."""
+    s, x, v = random_springs(d, kd=True)
+    F = s(x, v)
+    assert np.any(s.kd > 0) and np.abs(F - s(x)).max() > 1e-6  # the damping acts
+    assert np.abs(F.sum(axis=0)).max() < 1e-12
+
+
+@pytest.mark.parametrize("d", [2, 3])
 def test_momentum_conserved_and_force_is_minus_energy_gradient(d):
     s, x, v = random_springs(d, kd=False)
     F = s(x)
