@@ -202,6 +202,27 @@ class SelfCollision:
         """One integer per unordered pair, ``min n + max``."""
         return np.minimum(i, j).astype(np.int64) * self.n + np.maximum(i, j)
 
+    def is_neighbour(self, i, j):
+        """Whether each pair ``(i[k], j[k])`` is excluded: close at rest, or listed in `exclude`.
+
+        Parameters
+        ----------
+        i, j : array_like of int, shape (p,)
+            Particle indices, in [0, n).
+
+        Returns
+        -------
+        ndarray of bool, shape (p,)
+            True for the pairs that never collide.
+        """
+        i, j = np.asarray(i), np.asarray(j)
+        if i.shape != j.shape or i.ndim != 1 or (i.size and not np.issubdtype(i.dtype, np.integer)) \
+                or (j.size and not np.issubdtype(j.dtype, np.integer)):
+            raise ValueError(f"i and j must be integer arrays of the same shape (p,), got shapes {i.shape} and {j.shape}")
+        if i.size and (min(i.min(), j.min()) < 0 or max(i.max(), j.max()) >= self.n):
+            raise ValueError(f"i and j must hold particle indices from 0 to {self.n - 1}")
+        return self._is_excluded(self._keys(i, j))
+
     def _is_excluded(self, keys):
         pos = np.minimum(np.searchsorted(self.excluded, keys), max(len(self.excluded) - 1, 0))
         return self.excluded[pos] == keys if len(self.excluded) else np.zeros(len(keys), dtype=bool)
@@ -352,6 +373,8 @@ class SelfCollision:
 
         def with_self_collision(f, X, t, h, **options):
             X_new = step(f, X, t, h, **options)
+            if not np.isfinite(X_new).all():  # a blow-up: left for the run's divergence check to report
+                return X_new
             x = np.array(X_new[:, 0], order="F")
             v = np.array(X_new[:, 1], order="F")
             res = self._resolve(x, v)

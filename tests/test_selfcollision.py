@@ -97,6 +97,12 @@ def test_rest_neighbours_and_excluded_pairs_never_repel():
     assert res.pairs == 0 and res.iterations == 0
     np.testing.assert_array_equal(res.x, x)
     np.testing.assert_array_equal(res.v, 1.0)
+    i, j = np.triu_indices(sheet.n, 1)
+    L = np.linalg.norm(sheet.X[i, 0] - sheet.X[j, 0], axis=1)
+    springs = {(min(a, b), max(a, b)) for a, b in sheet.spring_indices().tolist()}
+    expected = (L < 2 * THICKNESS) | np.array([(a, b) in springs for a, b in zip(i, j)])
+    np.testing.assert_array_equal(sc.is_neighbour(i, j), expected)
+    np.testing.assert_array_equal(sc.is_neighbour(j, i), expected)
     far = SelfCollision(0.1, _far_apart(3), exclude=[[0, 2]])
     x3 = np.array([[0.0, 0.0, 0.0], [5.0, 0.0, 0.0], [0.01, 0.0, 0.0]])
     np.testing.assert_array_equal(far.resolve(x3, np.zeros((3, 3))).x, x3)
@@ -137,7 +143,7 @@ def _closest_non_neighbours(sc, X):
     out = []
     for x in X[:, :, 0]:  # a loop over recorded states
         i, j = all_pairs(x, 2 * sc.thickness)
-        keep = ~sc._is_excluded(sc._keys(i, j))
+        keep = ~sc.is_neighbour(i, j)
         r = np.linalg.norm(x[i[keep]] - x[j[keep]], axis=1)
         out.append(r.min(initial=np.inf))
     return np.array(out)
@@ -203,6 +209,17 @@ def test_two_sheets_on_a_floor_stay_stacked_with_collider_last():
             np.testing.assert_allclose(top, 0.0, atol=1e-12)
 
 
+def test_a_blow_up_is_reported_by_the_run():
+    """A diverging step goes through the wrapper unchanged, so the run raises SimulationDiverged."""
+    from particles import SimulationDiverged
+
+    sheet = cloth(5, 5, 0.2, 0.2, plane="horizontal", pins=None, k_structural=1e6)
+    step = SelfCollision.from_system(sheet, 0.04).stepper(symplectic_euler)
+    sheet.X[0, 0, 2] += 0.01
+    with pytest.raises(SimulationDiverged):
+        sheet.run(1.0, 0.01, method=step)
+
+
 def test_inputs_not_modified():
     """resolve returns corrected copies and leaves the arrays it was given alone."""
     x = np.array([[0.0, 0.0], [0.05, 0.0]])
@@ -241,5 +258,7 @@ def test_bad_positions_name_the_argument():
         sc.resolve(np.zeros((3, 3)), np.zeros((2, 3)))
     with pytest.raises(ValueError, match="v must have shape"):
         sc.resolve(np.zeros((2, 3)), np.zeros((2, 2)))
+    with pytest.raises(ValueError, match="i and j"):
+        sc.is_neighbour([0], [2])
     with pytest.raises(ValueError, match="search"):
         sc.close_pairs(np.zeros((2, 3)), search="octree")
