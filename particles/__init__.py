@@ -5,8 +5,12 @@ shape ``(n, 2, d)`` (positions and velocities), forces that add into a force
 array, and ODE steppers ``step(f, X, t, h)``. On top of it: collisions with
 implicit surfaces (:mod:`particles.collisions`), emitters and particle
 effects with lifetimes (:mod:`particles.emitters`, :mod:`particles.effects`),
-flocks (:mod:`particles.flocking`) and drawing (:mod:`particles.render`,
-imported on demand because it loads Matplotlib's pyplot).
+flocks (:mod:`particles.flocking`), mass-spring models with Provot's
+constraint, implicit solvers and cloth self-collision
+(:mod:`particles.massspring`, :mod:`particles.constraints`,
+:mod:`particles.implicit`, :mod:`particles.selfcollision`) and drawing
+(:mod:`particles.render`, imported on demand because it loads Matplotlib's
+pyplot).
 
 >>> import particles
 >>> from particles.forces import Gravity, Damping
@@ -15,7 +19,7 @@ imported on demand because it loads Matplotlib's pyplot).
 """
 
 from . import (collisions, constraints, effects, emitters, flocking, forces, implicit, integrators, massspring,
-               neighbors, springs, surfaces)
+               neighbors, selfcollision, springs, surfaces)
 from .collisions import Collider
 from .effects import ParticleEffect
 from .errors import ConvergenceError, SimulationDiverged
@@ -55,4 +59,5 @@ __all__ = [
     "emitters",
     "effects",
     "flocking",
+    "selfcollision",
 ]
