@@ -31,8 +31,9 @@ $(VENV)/.installed-lab: pyproject.toml | $(BIN)/python
 demo: $(VENV)/.installed
 	$(BIN)/particles tour --out $(OUT)
 
+# two workers (pytest-xdist), a test file per worker at a time: module fixtures (a graded corpus) run once
 test: $(VENV)/.installed-dev
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n 2 --dist loadfile
 
 lab: $(VENV)/.installed-lab
 	$(BIN)/jupyter lab lectures/

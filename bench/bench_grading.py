@@ -1,4 +1,4 @@
-"""Grading throughput: 50 submissions with --jobs 1 and with --jobs 2.
+"""Grading throughput: 50 submissions with --jobs 1 and with --jobs 2, and the cost of the OS walls.
 
 Submissions of one exercise are graded in batches: one pytest process per
 batch (its start-up and the reference library are paid once per batch), and
@@ -13,6 +13,10 @@ grading).
 The machine is shared: the script interleaves the two settings, keeps the
 best of each, and prints the CPU time of the graders so that a low speed-up
 caused by load elsewhere can be told from one caused by the grader.
+
+The third setting grades with the Python-level walls alone (no namespaces, no
+uid of its own, no Landlock: the grader as it was before the operating
+system's layers), the baseline of the per-submission cost.
 
 Run: .venv/bin/python bench/bench_grading.py [--n 50] [--repeat 2]
 """
@@ -32,6 +36,7 @@ sys.path.insert(0, str(ROOT / "tests" / "grader"))
 
 import corpus  # noqa: E402
 
+from particles.course import isolation  # noqa: E402
 from particles.course.grading import grade  # noqa: E402
 
 QUICK = ["euler_as_midpoint", "wrong_shape", "returns_nan", "mutates_input", "calls_sys_exit",
@@ -56,25 +61,39 @@ def main():
         folder = Path(tmp) / "subs"
         folder.mkdir()
         make_submissions(folder, args.n)
-        wall, cpu = {1: [], 2: []}, {1: [], 2: []}
+        walls = isolation.plan("auto")
+        baseline = isolation.Plan.from_option("no-namespaces,no-uid,no-landlock")
+        settings = {"OS walls, --jobs 1": (1, walls), "OS walls, --jobs 2": (2, walls),
+                    "Python walls only, --jobs 1": (1, baseline)}
+        wall, cpu = {name: [] for name in settings}, {name: [] for name in settings}
         load = os.getloadavg()[0]
-        for run in range(args.repeat):  # interleaved, so that a burst of load elsewhere hits both settings
-            for jobs in (1, 2):
+        for run in range(args.repeat):  # interleaved, so that a burst of load elsewhere hits every setting
+            for name, (jobs, plan) in settings.items():
                 before = resource.getrusage(resource.RUSAGE_CHILDREN)
                 start = time.perf_counter()
-                summary = grade([folder], Path(tmp) / f"out{jobs}-{run}", jobs=jobs, seed=1, time_limit=2.0,
-                                root=ROOT)
-                wall[jobs].append(time.perf_counter() - start)
+                summary = grade([folder], Path(tmp) / f"out{len(wall[name])}-{jobs}-{run}-{plan.namespaces}",
+                                jobs=jobs, seed=1, time_limit=2.0, root=ROOT, isolation=plan)
+                wall[name].append(time.perf_counter() - start)
                 after = resource.getrusage(resource.RUSAGE_CHILDREN)
-                cpu[jobs].append(after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
+                cpu[name].append(after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
                 assert len(summary["students"]) == args.n
         print(f"{args.n} submissions of 00_warmup, best of {args.repeat} runs; load average before: {load:.2f}, "
               f"after: {os.getloadavg()[0]:.2f}")
-        print(f"{'jobs':>6}{'wall s':>10}{'per submission':>16}{'CPU s':>10}")
-        for jobs in (1, 2):
-            best = min(wall[jobs])
-            print(f"{jobs:>6}{best:>10.1f}{best / args.n:>15.2f}s{min(cpu[jobs]):>10.1f}")
-        print(f"speed-up of --jobs 2 over --jobs 1: x{min(wall[1]) / min(wall[2]):.2f}")
+        print(f"OS walls: {isolation.describe(summary_layers(summary))}")
+        print(f"{'setting':<30}{'wall s':>10}{'per submission':>16}{'CPU s':>10}")
+        for name in settings:
+            best = min(wall[name])
+            print(f"{name:<30}{best:>10.1f}{best / args.n:>15.2f}s{min(cpu[name]):>10.1f}")
+        one, two, python = (min(wall[name]) for name in settings)
+        print(f"speed-up of --jobs 2 over --jobs 1: x{one / two:.2f}")
+        print(f"per-submission cost of the OS walls over the Python walls alone: x{one / python:.2f}")
+
+
+def summary_layers(summary):
+    """The walls of the first graded notebook of a run."""
+    for results in summary["students"].values():
+        return results[0].get("isolation", {})
+    return {}
 
 
 if __name__ == "__main__":

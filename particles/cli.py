@@ -80,7 +80,8 @@ def _release(args):
 
 
 def _grade(args):
-    from .course.grading import grade
+    from .course.grading import LibraryChanged, grade
+    from .course.isolation import IsolationUnavailable
     from .course.reports import score_of
 
     def progress(result):
@@ -93,11 +94,17 @@ def _grade(args):
             args.submissions, args.out, jobs=args.jobs, exercise=args.exercise, public_only=args.public,
             seed=args.seed, time_limit=args.time_limit, memory_mb=args.memory_mb, root=_root(args),
             private=args.private, hidden_visibility=args.hidden_visibility, gradescope=args.gradescope,
-            progress=progress,
+            progress=progress, isolation=args.isolation, resume=args.resume,
         )
-    except ValueError as error:
+    except (ValueError, IsolationUnavailable) as error:
         print(f"particles grade: {error}", file=sys.stderr)
         return 2
+    except LibraryChanged as error:
+        print(f"particles grade: GRADING FAILED: {error}", file=sys.stderr)
+        return 3
+    print(f"sandbox: {summary['isolation']}")
+    if summary.get("resumed"):
+        print(f"resumed: {summary['resumed']} record(s) kept from the earlier run")
     for problem in summary["problems"]:
         print(f"not graded: {problem}", file=sys.stderr)
     exercises = summary["exercises"]
@@ -127,6 +134,24 @@ def _gradescope_bundle(args):
         return 2
     print(f"wrote {args.out}: {len(names)} files (setup.sh, run_autograder, the library and the exercise tests)")
     return 0
+
+
+def _similarity(args):
+    from .course.similarity import format_table, similarity, write_report
+
+    try:
+        report = similarity(args.submissions, threshold=args.threshold, exercise=args.exercise,
+                            root=_root(args), min_nodes=args.min_nodes)
+    except ValueError as error:  # a missing folder, a threshold outside [0, 1], an unknown exercise
+        print(f"particles similarity: {error}", file=sys.stderr)
+        return 2
+    for problem in report.problems:
+        print(f"not compared: {problem}", file=sys.stderr)
+    print(format_table(report, per_cluster=None if args.all else 10))
+    if args.out:
+        paths = write_report(report, args.out)
+        print(f"\nwrote {', '.join(str(p) for p in paths)}")
+    return 0  # a report, whatever it found
 
 
 def build_parser():
@@ -186,6 +211,11 @@ def build_parser():
                        choices=["hidden", "after_due_date", "after_published", "visible"],
                        help="Gradescope visibility of hidden tests (default after_published)")
     grade.add_argument("--root", help="the course folder (default: found from the current directory)")
+    grade.add_argument("--isolation", choices=["auto", "strict"], default="auto",
+                       help="auto: the strongest sandbox this machine allows (default); strict: refuse to grade "
+                            "without the namespace sandbox")
+    grade.add_argument("--resume", action="store_true",
+                       help="keep the records in OUT/records of unchanged notebooks and grade only the rest")
     grade.set_defaults(run=_grade)
 
     bundle = sub.add_parser("gradescope-bundle", help="write the Gradescope autograder zip")
@@ -193,6 +223,22 @@ def build_parser():
     bundle.add_argument("--exercise", help="grade every submitted notebook as this exercise")
     bundle.add_argument("--root", help="the course folder (default: found from the current directory)")
     bundle.set_defaults(run=_gradescope_bundle)
+
+    similar = sub.add_parser("similarity", help="report submitted functions structurally equal to the library, "
+                             "a master or a classmate",
+                             description="Compare the asked functions of every submission (normalized syntax "
+                             "trees) with the library, the masters and each other; print the matching pairs "
+                             "by cluster. Exit status 0 whatever is found.")
+    similar.add_argument("submissions", nargs="+", metavar="DIR", help="a folder of submissions (or notebooks)")
+    similar.add_argument("--out", metavar="DIR", help="write similarity.csv and similarity.md here")
+    similar.add_argument("--threshold", type=float, default=0.8,
+                         help="smallest similarity reported, 0 to 1 (default 0.8; 1: identical structure only)")
+    similar.add_argument("--exercise", help="read every notebook as this exercise")
+    similar.add_argument("--all", action="store_true", help="print every pair (default: 10 per cluster)")
+    similar.add_argument("--min-nodes", type=int, default=10,
+                         help="ignore functions with fewer normalized syntax nodes (default 10)")
+    similar.add_argument("--root", help="the course folder (default: found from the current directory)")
+    similar.set_defaults(run=_similarity)
     return parser
 
 

@@ -11,6 +11,8 @@ from pathlib import Path
 
 import pytest
 
+from particles.course import isolation
+
 from particles.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -65,6 +67,10 @@ def test_run_autograder_grades_the_master(bundle, tmp_path):
     assert len(results["tests"]) == 8 and {t["status"] for t in results["tests"]} == {"passed"}
     assert {"name", "score", "max_score", "status", "output", "visibility"} <= set(results["tests"][0])
     assert results["execution_time"] > 0 and "00_warmup: 11 / 11" in results["output"]
+    # the same sandbox as `particles grade`, and the output says which layers were active
+    expected = "namespaces (bubblewrap)" if isolation.probe()["namespaces"] else "no namespaces"
+    assert f"Sandbox of your code: {expected}" in results["output"]
+    assert results["extra_data"]["sandbox"]["00_warmup"]["audit_hook"] is True
 
 
 def test_run_autograder_survives_a_broken_submission(bundle, tmp_path):

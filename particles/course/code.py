@@ -1,48 +1,71 @@
 """Which parts of a submitted notebook run in the grader, and what they use.
 
-The grader runs the *definitions* of a notebook, not its experiments. From
-every code cell it keeps the top-level statements that are
+Cells are read as Jupyter runs them (:mod:`particles.course.magics`): IPython's
+own transformer turns magics and ``!`` commands into ``get_ipython()`` calls,
+which the worker answers with a stand-in shell
+(:mod:`particles.course.ipython_shim`). A ``%%time``, ``%%capture`` or
+``%%prun`` cell counts as the code it wraps, and ``%time stmt`` as ``stmt``; a
+``%%timeit`` cell does not, since Jupyter runs it in a namespace of its own
+and nothing it defines stays defined.
 
-* imports (``import numpy as np``, ``from math import pi``),
-* function and class definitions (``def``, ``class``, with their decorators),
-* assignments of constants to plain names (``g = 9.81``,
-  ``X0 = np.array([[1.0], [0.0]])``, ``k, L0 = 10.0, 0.5``), where the value
-  uses only literals, names, arithmetic, indexing and a few cheap
-  constructors (``np.array``, ``np.zeros``, ``np.linspace``, ``float``, ...),
+What runs is decided by what each top-level statement does, not by its
+syntax alone:
 
-and skips everything else: expression statements (plots, prints, calls that
-run an experiment), loops, ``with``/``if``/``try`` blocks at top level,
-assignments from other calls (``t, X = simulate(...)``), and IPython magics
-(``%matplotlib inline``, ``!pip``, ``%%time`` cells). Each kept statement runs
-separately with a time limit, so one failing statement does not hide the
-definitions after it. A function that a test needs is therefore defined even
-when the plotting cell below it is slow or broken.
+* **definitions always run**: imports, ``def`` and ``class`` (with their
+  decorators), assignments of a ``lambda``, and ``%%writefile`` cells that
+  write a file in the working folder;
+* **constants run**: assignments whose value uses only literals, names,
+  arithmetic, indexing and a few cheap constructors (``g = 9.81``,
+  ``X0 = np.array([[1.0], [0.0]])``), unless they use a name the grader did
+  not compute;
+* **other assignments run when they are needed**: an assignment computed by a
+  call (``EPS = np.finfo(float).eps``, ``CASES = dict(a=Thing(1))``,
+  ``x = %timeit -o f()``), an item or attribute assignment and ``+=`` run
+  when they bind a name that a function or class the tests can reach reads as
+  a global, or that another statement that runs reads (transitively); and an
+  assignment to a single name runs when its value is **callable**, so that a
+  test may call it: a wrapper (``functools.partial``, ``np.vectorize``), a call
+  of the notebook's own function that returns a function or of its own class
+  with ``__call__``, or a name that the notebook calls (``name(...)``) or also
+  defines with ``def``;
+* **everything else is skipped**, with its reason: expression statements
+  (plots, prints, experiments), top-level loops, ``if``, ``with`` and ``try``
+  blocks, other magics and shell commands, and assignments nothing needs
+  (``t, X = simulate(...)`` whose result no function uses).
 
-The same syntax trees give each function's parameter names (for messages)
-and the library names it uses, directly or through the submission's other
-functions, which is how forbidden calls are found (:meth:`SubmissionCode.forbidden_uses`).
+The last definition of a name wins, as when the notebook runs from top to
+bottom: a global read inside a function is the name's last binding in the
+notebook, a name read by a top-level statement its last binding above it.
+What the tests can reach starts from the definitions in force at the end, so a
+draft redefined further down neither pulls in what it used nor counts for the
+forbidden-use check or :meth:`SubmissionCode.parameters`.
+
+This keeps grading as fast as running definitions only: the experiments of the
+masters (``t, X = run(...)``, a stability study) are assignments no function
+reads. Each kept statement runs separately with a time limit, so one failing
+statement does not hide the definitions after it. The rule is applied by
+:mod:`particles.course.selection`; when a test needs a name the grader skipped,
+:meth:`SubmissionCode.explain_missing` says which statement, where, and why.
+
+The same syntax trees, with names resolved by scope
+(:mod:`particles.course.scopes`), give each function's parameter names (for
+messages) and the library names it uses, directly or through the submission's
+other functions and constants (:meth:`SubmissionCode.forbidden_uses`).
 """
 
 import ast
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .magics import magic_call, to_python, transformer
+from .scopes import bound_names
+from .selection import Statement, analyse, import_names, import_path, providers
+
 __all__ = ["Chunk", "Skipped", "SubmissionCode", "notebook_cells", "read_submission"]
 
-_CHEAP_CALLS = {
-    "array", "asarray", "zeros", "ones", "full", "eye", "identity", "linspace", "arange", "sqrt",
-    "radians", "deg2rad", "float64", "int64", "default_rng", "exp", "log", "sin", "cos", "tan", "pi",
-    "diag", "reshape",
-}
-_CHEAP_BUILTINS = {"float", "int", "complex", "bool", "str", "tuple", "list", "dict", "set", "frozenset",
-                   "range", "len", "abs", "min", "max", "round", "sum"}
-_MODULES_FOR_CHEAP_CALLS = {"numpy", "math"}
-_EXPRESSION_NODES = (
-    ast.Constant, ast.Name, ast.Load, ast.Attribute, ast.Tuple, ast.List, ast.Set, ast.Dict, ast.UnaryOp,
-    ast.BinOp, ast.BoolOp, ast.Compare, ast.IfExp, ast.Subscript, ast.Slice, ast.Starred, ast.keyword,
-    ast.operator, ast.unaryop, ast.boolop, ast.cmpop, ast.expr_context, ast.Call,
-)
+_WRAPPING_CELL_MAGICS = {"time", "capture", "prun"}  # run the body in the notebook's namespace
 
 
 @dataclass
@@ -56,13 +79,14 @@ class Chunk:
 
 @dataclass
 class Skipped:
-    """One top-level statement the grader does not run, and why."""
+    """One top-level statement the grader does not run, why, and the names it would have bound."""
 
     label: str
     line: int
     text: str
     reason: str
     names: tuple = ()
+    advice: str = ""
 
 
 def notebook_cells(path):
@@ -106,108 +130,88 @@ def _kind_of(source):
     return f"a value of type {type(source).__name__}"
 
 
-def _strip_magics(source):
-    """Blank out IPython line magics and shell escapes, keeping line numbers."""
-    return "\n".join("" if line.lstrip().startswith(("%", "!")) else line for line in source.split("\n"))
+# -- reading cells ----------------------------------------------------------------------------
+
+def _names_in(source):
+    """Top-level names a piece of Python would bind (for messages), () when it does not parse."""
+    try:
+        tree = ast.parse(to_python(source))
+    except (SyntaxError, ValueError):
+        return ()
+    return tuple(sorted(set().union(*[bound_names(s) for s in tree.body])))
 
 
-def _dotted(node):
-    """'np.linalg.norm' for a Name/Attribute chain, else None."""
-    parts = []
-    while isinstance(node, ast.Attribute):
-        parts.append(node.attr)
-        node = node.value
-    if isinstance(node, ast.Name):
-        parts.append(node.id)
-        return ".".join(reversed(parts))
-    return None
+def _first_line(source):
+    """1-based number of the first line of `source` that is not blank."""
+    return next((k for k, line in enumerate(source.split("\n"), start=1) if line.strip()), 1)
 
 
-class _Aliases(ast.NodeVisitor):
-    """Local name -> full module or object path, from every import statement."""
+def _skip(label, line, text, reason, names=(), advice=""):
+    return Statement(label, line, line, None, "", text[:60], reason=reason, binds=frozenset(names), advice=advice)
 
-    def __init__(self):
-        self.map, self.star = {}, []
 
-    def visit_Import(self, node):
-        for alias in node.names:
-            if alias.asname:
-                self.map[alias.asname] = alias.name
-            else:
-                root = alias.name.split(".")[0]
-                self.map[root] = root
+def _read_cell(label, source, offset, out, errors):
+    """Append the top-level statements of `source` (a cell, or the body of a ``%%time`` cell) to `out`.
 
-    def visit_ImportFrom(self, node):
-        if node.level or not node.module:
+    `offset` is the number of cell lines above `source`; syntax errors go to `errors`.
+    """
+    manager = transformer()
+    if manager is None and source.lstrip().startswith("%%"):
+        first = _first_line(source)
+        body = "\n".join(source.split("\n")[first:])
+        out.append(_skip(label, offset + first, source.split("\n")[first - 1].strip(), "a cell magic",
+                         _names_in(body), "move the definition to a cell without a magic"))
+        return
+    try:
+        python = source
+        tree = ast.parse(python)  # plain Python: Jupyter runs it as it is
+    except (SyntaxError, ValueError):
+        python = to_python(source, manager)
+        try:
+            tree = ast.parse(python)
+        except (SyntaxError, ValueError) as error:  # ValueError: a null byte, before Python 3.12
+            where = f"line {error.lineno + offset}: " if getattr(error, "lineno", None) else ""
+            errors.append((label, f"{where}{getattr(error, 'msg', None) or error}"))
             return
-        for alias in node.names:
-            if alias.name == "*":
-                self.star.append(node.module)
-            else:
-                self.map[alias.asname or alias.name] = f"{node.module}.{alias.name}"
+    original, lines = source.split("\n"), python.split("\n")
+    spans = [(min([d.lineno for d in getattr(s, "decorator_list", [])] + [s.lineno]), s.end_lineno) for s in tree.body]
+    for k, stmt in enumerate(tree.body):
+        start, end = spans[k]
+        text = (original[start - 1] if start <= len(original) else lines[start - 1]).strip()
+        magic = magic_call(stmt.value) if isinstance(stmt, ast.Expr) else None
+        if magic and magic[0] == "run_cell_magic":
+            _read_cell_magic(label, source, offset, magic, stmt, out, errors)
+            continue
+        if magic and magic[0] == "run_line_magic" and magic[1] == "time" and magic[2].strip():
+            _read_cell(label, magic[2].strip(), offset + start - 1, out, errors)  # `%time x = f()` binds x
+            continue
+        shared = any(k != j and not (e < start or s > end) for j, (s, e) in enumerate(spans))
+        if shared:
+            chunk, start = ast.get_source_segment(python, stmt) or ast.unparse(stmt), stmt.lineno
+        else:
+            chunk = "\n".join(lines[start - 1:end])
+        out.append(Statement(label, offset + start, offset + end, stmt, chunk, text[:60]))
 
 
-def _is_cheap(node, aliases):
-    for sub in ast.walk(node):
-        if not isinstance(sub, _EXPRESSION_NODES):
-            return False
-        if isinstance(sub, ast.Call):
-            name = _dotted(sub.func)
-            if name is None:
-                return False
-            parts = name.split(".")
-            if len(parts) == 1:
-                if parts[0] not in _CHEAP_BUILTINS:
-                    return False
-            else:
-                module = aliases.get(parts[0], parts[0]).split(".")[0]
-                if module not in _MODULES_FOR_CHEAP_CALLS or parts[-1] not in _CHEAP_CALLS:
-                    return False
-    return True
+def _read_cell_magic(label, source, offset, magic, stmt, out, errors):
+    _, name, line, body = magic
+    first = offset + _first_line(source)  # the %% line; the body starts below it
+    header = f"%%{name} {line}".strip()
+    if name in _WRAPPING_CELL_MAGICS:
+        _read_cell(label, body, first, out, errors)
+    elif name == "timeit":
+        out.append(_skip(label, first, header, "a %%timeit cell, which Jupyter runs in a namespace of its own "
+                         "(what it defines does not stay defined)", _names_in(body),
+                         "move the definition to a cell without %%timeit"))
+    elif name in ("writefile", "file") and re.fullmatch(r"(-a\s+)?[\w.-]+", line.strip()) and ".." not in line:
+        python = ast.unparse(stmt)
+        out.append(Statement(label, first, first, stmt, python, header[:60], kind="magic"))
+    else:
+        out.append(_skip(label, first, header, f"a %%{name} cell, which the grader does not run", _names_in(body),
+                         f"move the definition to a cell without %%{name}"))
 
 
-def _target_names(target):
-    if isinstance(target, ast.Name):
-        return [target.id]
-    if isinstance(target, (ast.Tuple, ast.List)):
-        names = [_target_names(t) for t in target.elts]
-        return None if any(n is None for n in names) else [x for n in names for x in n]
-    return None
-
-
-def _defined_names(stmt):
-    if isinstance(stmt, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-        return [stmt.name]
-    if isinstance(stmt, (ast.Import, ast.ImportFrom)):
-        return [a.asname or a.name.split(".")[0] for a in stmt.names if a.name != "*"]
-    if isinstance(stmt, ast.Assign):
-        return [n for t in stmt.targets for n in (_target_names(t) or [])]
-    if isinstance(stmt, ast.AnnAssign):
-        return _target_names(stmt.target) or []
-    return []
-
-
-def _classify(stmt, aliases):
-    """None when `stmt` runs in the grader, else the reason it is skipped."""
-    if isinstance(stmt, (ast.Import, ast.ImportFrom, ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-        return None
-    if isinstance(stmt, (ast.Assign, ast.AnnAssign)):
-        targets = stmt.targets if isinstance(stmt, ast.Assign) else [stmt.target]
-        if any(_target_names(t) is None for t in targets):
-            return "an assignment to an attribute or an item"
-        if stmt.value is None:
-            return None
-        if _is_cheap(stmt.value, aliases):
-            return None
-        return "an assignment computed by a call (only constants are assigned in the grader)"
-    if isinstance(stmt, ast.Expr):
-        if isinstance(stmt.value, ast.Constant):
-            return "a bare value"
-        return "an expression or call (plots, prints and experiments are not run)"
-    if isinstance(stmt, (ast.For, ast.While, ast.AsyncFor)):
-        return "a top-level loop"
-    return f"a top-level {type(stmt).__name__.lower()} statement"
-
+# -- the analysis -----------------------------------------------------------------------------
 
 @dataclass
 class SubmissionCode:
@@ -220,91 +224,105 @@ class SubmissionCode:
     skipped: list = field(default_factory=list)
     syntax_errors: list = field(default_factory=list)
     _statements: list = field(default_factory=list, repr=False)
-    _aliases: dict = field(default_factory=dict, repr=False)
-    _star: list = field(default_factory=list, repr=False)
+    _binders: dict = field(default_factory=dict, repr=False)
+    _cache: dict = field(default_factory=dict, repr=False)
 
     @classmethod
     def from_cells(cls, cells):
         """Analyse ``(label, source)`` pairs, in notebook order."""
         code = cls()
-        parsed = []
+        statements = []
         for label, source in cells:
-            if source.lstrip().startswith("%%"):
-                first = source.strip().splitlines()[0]
-                code.skipped.append(Skipped(label, 1, first[:60], "a cell magic"))
+            _read_cell(label, source, 0, statements, code.syntax_errors)
+        aliases = {}
+        for s in statements:
+            if isinstance(s.node, (ast.Import, ast.ImportFrom)):
+                for name in import_names(s.node):
+                    aliases[name] = import_path(s.node, name) or name
+        analyse(statements, aliases)
+        for s in statements:
+            if s.reason is not None:
+                code.skipped.append(Skipped(s.label, s.line, s.text, s.reason, tuple(sorted(s.binds | s.updates)),
+                                            s.advice))
                 continue
-            source = _strip_magics(source)
-            try:
-                tree = ast.parse(source)
-            except (SyntaxError, ValueError) as error:  # ValueError: a null byte, before Python 3.12
-                where = f"line {error.lineno}: " if getattr(error, "lineno", None) else ""
-                code.syntax_errors.append((label, f"{where}{getattr(error, 'msg', None) or error}"))
-                continue
-            parsed.append((label, source, tree))
-        aliases = _Aliases()
-        for _, _, tree in parsed:
-            aliases.visit(tree)  # imports at any depth, inside functions too
-        code._aliases, code._star = aliases.map, aliases.star
-        unavailable = set()  # names last bound by a statement the grader skips
-        for label, source, tree in parsed:
-            lines = source.split("\n")
-            spans = [(min([d.lineno for d in getattr(s, "decorator_list", [])] + [s.lineno]), s.end_lineno)
-                     for s in tree.body]
-            for k, stmt in enumerate(tree.body):
-                start, end = spans[k]
-                reason = _classify(stmt, aliases.map)
-                if reason is None and isinstance(stmt, (ast.Assign, ast.AnnAssign)) and stmt.value is not None:
-                    used = sorted({n.id for n in ast.walk(stmt.value) if isinstance(n, ast.Name)} & unavailable)
-                    if used:
-                        reason = f"an assignment that uses `{used[0]}`, which the grader did not compute"
-                names = set(_defined_names(stmt))
-                if reason is not None and isinstance(stmt, (ast.Assign, ast.AnnAssign)):
-                    unavailable |= names
-                elif reason is None:
-                    unavailable -= names
-                if reason is not None:
-                    text = lines[start - 1].strip()[:60]
-                    code.skipped.append(Skipped(label, start, text, reason, tuple(_defined_names(stmt))))
-                    continue
-                shared = any(k != j and not (e < start or s > end) for j, (s, e) in enumerate(spans))
-                if shared:
-                    text = ast.get_source_segment(source, stmt) or ast.unparse(stmt)
-                    start = stmt.lineno
-                else:
-                    text = "\n".join(lines[start - 1:end])
-                code.chunks.append(Chunk(label, start, text))
-                code._statements.append((label, stmt))
+            code.chunks.append(Chunk(s.label, s.line, s.source))
+            code._statements.append(s)
+            for name in s.binds | s.updates:
+                code._binders.setdefault(name, []).append(s)
         return code
 
+    def _in_force(self, name, before=None):
+        """The kept statements whose effect on `name` is in force before statement `before` (None: at the end)."""
+        return providers(self._binders, name, before)
+
+    def _definition(self, name):
+        """The kept statement that last binds `name` as a whole, or None."""
+        return next((s for s in self._in_force(name) if name in s.binds), None)
+
     def defines(self):
-        """Top-level names the kept statements define, mapped to (label, line)."""
-        out = {}
-        for label, stmt in self._statements:
-            for name in _defined_names(stmt):
-                out[name] = (label, stmt.lineno)
-        return out
+        """Top-level names the kept statements define, mapped to (label, line) of their last definition."""
+        return {name: (s.label, s.line) for name in self._binders
+                for s in [self._definition(name)] if s is not None}
 
     def skipped_assignment(self, name):
-        """The skipped statement that would have defined `name`, or None."""
+        """The last skipped statement that would have bound `name` (an assignment, a block, a cell), or None."""
         return next((skip for skip in reversed(self.skipped) if name in skip.names), None)
 
     def parameters(self, name):
-        """Parameter names of the last top-level ``def name(...)``, or None."""
-        found = None
-        for _, stmt in self._statements:
-            if isinstance(stmt, (ast.FunctionDef, ast.AsyncFunctionDef)) and stmt.name == name:
-                a = stmt.args
-                found = [p.arg for p in a.posonlyargs + a.args]
-        return found
+        """Parameter names of the definition of `name` in force (a ``def`` or a ``lambda``), or None."""
+        s = self._definition(name)
+        node = None if s is None else s.node
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            args = node.args
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)) and isinstance(node.value, ast.Lambda):
+            args = node.value.args
+        else:
+            return None
+        return [p.arg for p in args.posonlyargs + args.args]
 
     def forbidden_uses(self, name, forbidden):
         """Forbidden library names that function `name` uses (see :func:`particles.course.forbidden.forbidden_uses`)."""
         from .forbidden import forbidden_uses
 
-        return forbidden_uses(self, name, forbidden)
+        key = (name, tuple(sorted(forbidden)))
+        if key not in self._cache:
+            self._cache[key] = forbidden_uses(self, name, forbidden)
+        return list(self._cache[key])
+
+    def explain_missing(self, name, load_errors=()):
+        """Why `name` is missing in the worker although the notebook binds it, as a clause; None if it does not.
+
+        Parameters
+        ----------
+        name : str
+            A top-level name.
+        load_errors : list of dict
+            The worker's errors from loading the notebook (``label``, ``where``, ``type``, ``message``).
+
+        Returns
+        -------
+        str or None
+            E.g. "the grader skipped `%%timeit` (code cell 3, line 1) because it
+            is a %%timeit cell, ...; move the definition to a cell without %%timeit".
+        """
+        s = self._definition(name)
+        if s is not None:
+            same_cell = [c for c in self._statements if c.label == s.label]
+            for error in load_errors:
+                line = re.match(rf"{re.escape(s.label)}, line (\d+)", error.get("where", ""))
+                inside = line is not None and s.line <= int(line.group(1)) <= s.end
+                if error.get("label") == s.label and (inside or (line is None and len(same_cell) == 1)):
+                    return (f"the grader ran `{s.text}` ({s.label}, line {s.line}), which raised "
+                            f"{error.get('type')}: {error.get('message')}")
+            return None
+        skip = self.skipped_assignment(name)
+        if skip is None:
+            return None
+        advice = skip.advice or f"define `{name}` with `def`"
+        return (f"the grader skipped `{skip.text}` ({skip.label}, line {skip.line}) because it is {skip.reason}; "
+                f"{advice}")
 
 
 def read_submission(path):
     """:class:`SubmissionCode` of the notebook at `path`."""
     return SubmissionCode.from_cells(notebook_cells(path))
-

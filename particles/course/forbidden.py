@@ -1,21 +1,28 @@
 """Forbidden calls: which library names a submission's function uses.
 
 An exercise that asks for the midpoint step forbids ``particles.integrators.midpoint``.
-The check reads the submission's syntax trees (nothing is run): every name
-and attribute chain is resolved through the submission's imports
-(``import particles.integrators as I`` then ``I.midpoint``, ``from particles
-import INTEGRATORS``, ``getattr(module, "name")`` with a constant string) and
-compared with the forbidden names by identity of the library objects, so a
-re-export (``particles.integrate`` is ``particles.integrators.integrate``)
-counts too. Uses are followed through the submission's own helper functions.
-Dynamic tricks (``importlib`` with computed strings) are caught at run time by
-the worker's tripwires (:mod:`particles.course.sandbox`).
+The check reads the submission's syntax trees (nothing is run). Every name a
+function uses is resolved by scope, as Python does (:mod:`particles.course.scopes`):
+a parameter, a local variable, a comprehension variable or a local import is
+the function's own; a global is the notebook's binding of that name that is
+in force (the last one for a name read when the function is called, the last
+one above for a name read when a statement runs), so the student's own
+``def integrate`` or a draft redefined further down is not the library's.
+Names that resolve to an import (``import particles.integrators as I`` then
+``I.euler``, ``from particles import INTEGRATORS``, ``getattr(module, "name")``
+with a constant string, ``from particles.integrators import *``) are compared
+with the forbidden names by identity of the library objects, so a re-export
+(``particles.integrate`` is ``particles.integrators.integrate``) counts too.
+Uses are followed through the submission's own functions, classes and
+constants (``STEPPERS = {"euler": euler}``). Dynamic tricks (``importlib``
+with computed strings) are caught at run time by the worker's tripwires
+(:mod:`particles.course.sandbox`).
 """
 
 import ast
 import importlib
 
-from .code import _defined_names, _dotted
+from .scopes import dotted
 
 __all__ = ["forbidden_uses"]
 
@@ -39,30 +46,24 @@ def _resolve_object(name):
     return None
 
 
-def _uses(code, stmt):
-    """Dotted names (resolved through imports) and top-level names used by one statement."""
-    dotted, names = set(), set()
-    for node in ast.walk(stmt):
-        if isinstance(node, (ast.Attribute, ast.Name)):
-            name = _dotted(node)
-            if name:
-                root, _, rest = name.partition(".")
-                full = code._aliases.get(root, root if not code._star else None)
-                if full is None:  # a star import may have brought the name in
-                    full = next((f"{m}.{root}" for m in code._star), root)
-                dotted.add(full + ("." + rest if rest else ""))
-                names.add(root)
-        if isinstance(node, ast.Call) and _dotted(node.func) == "getattr" and len(node.args) >= 2:
-            base, attr = _dotted(node.args[0]), node.args[1]
-            if base and isinstance(attr, ast.Constant) and isinstance(attr.value, str):
-                root, _, rest = base.partition(".")
-                full = code._aliases.get(root, root)
-                dotted.add(f"{full}{'.' + rest if rest else ''}.{attr.value}")
-        if isinstance(node, ast.ImportFrom) and node.module and not node.level:
-            for alias in node.names:
-                if alias.name != "*":
-                    dotted.add(f"{node.module}.{alias.name}")
-    return dotted, names
+def _star_path(code, name, before, after):
+    """``module.name`` when a kept ``from module import *`` of the library, between statements `after` and
+    `before`, binds `name`; else None."""
+    for s in reversed(code._statements):
+        node = s.node
+        if (before is not None and s.index >= before) or not isinstance(node, ast.ImportFrom):
+            continue
+        if s.index <= after:
+            return None
+        if node.module and not node.level and any(a.name == "*" for a in node.names):
+            module = _resolve_object(node.module)
+            if module is None:
+                continue
+            exported = getattr(module, "__all__", None) or [n for n in dir(module) if not n.startswith("_")]
+            if name in exported:
+                return f"{node.module}.{name}"
+    return None
+
 
 def forbidden_uses(code, name, forbidden):
     """Forbidden library names that function `name` uses, directly or through helpers.
@@ -82,32 +83,48 @@ def forbidden_uses(code, name, forbidden):
     -------
     list of tuple
         ``(forbidden name, via)`` where `via` is the chain of submission
-        functions that leads to the use, e.g. ``["run", "euler_step"]``.
+        names that leads to the use, e.g. ``["run", "euler_step"]``.
     """
-    targets = {}
-    for f in forbidden:
-        obj = _resolve_object(f)
-        targets[f] = obj
-    by_name = {}
-    for label, stmt in code._statements:
-        for defined in _defined_names(stmt):
-            by_name.setdefault(defined, []).append(stmt)
-    found, seen, queue = [], set(), [(name, [name])]
+    from .selection import import_path
+
+    targets = {f: _resolve_object(f) for f in forbidden}
+    found, seen, queue = [], set(), []
+
+    def hit(path, via):
+        match = _match(path, targets)
+        if match and match not in {h for h, _ in found}:
+            found.append((match, via or [name]))
+
+    def resolve(root, rest, before, via, depth=0):
+        """Follow the notebook's binding of `root` in force before statement `before`."""
+        providers = code._in_force(root, before)
+        star = _star_path(code, root, before, providers[0].index if providers else -1)
+        if star:
+            hit(star + rest, via)
+            return
+        for p in providers:
+            node = p.node
+            if p.kind == "import":
+                hit((import_path(node, root) or root) + rest, via)
+            elif (isinstance(node, ast.Assign) and p.binds == {root} and len(node.targets) == 1
+                  and isinstance(node.targets[0], ast.Name) and dotted(node.value) and depth < 20):
+                alias = dotted(node.value)  # `I = particles.integrators`, `step = euler`
+                head, _, tail = alias.partition(".")
+                resolve(head, ("." + tail if tail else "") + rest, p.index, via, depth + 1)
+            elif p not in seen:
+                seen.add(p)
+                queue.append((p, via + [root]))
+
+    resolve(name, "", None, [])
     while queue:
-        current, via = queue.pop(0)
-        if current in seen:
-            continue
-        seen.add(current)
-        for stmt in by_name.get(current, []):
-            dotted, names = _uses(code, stmt)
-            for used in sorted(dotted):
-                hit = _match(used, targets)
-                if hit and hit not in {h for h, _ in found}:
-                    found.append((hit, via))
-            for other in sorted(names):
-                if other in by_name and other not in seen and other != current:
-                    queue.append((other, via + [other]))
+        s, via = queue.pop(0)
+        for ref in s.refs:
+            if ref.imported is not None:
+                hit(ref.imported, via)
+            else:
+                resolve(ref.name, ref.chain[len(ref.name):], None if ref.deferred else s.index, via)
     return found
+
 
 def _match(used, targets):
     for f, obj in targets.items():

@@ -52,8 +52,9 @@ def run_autograder_script(exercise=None):
     exercise_arg = f" --exercise {exercise}" if exercise else ""
     return f"""#!/usr/bin/env bash
 # Gradescope runs this for every submission: grade /autograder/submission into
-# /autograder/results/results.json. Student code runs in a separate, limited worker
-# process and may not read anything under /autograder but the library.
+# /autograder/results/results.json. Student code runs in a separate worker process inside
+# the operating system's walls (see particles.course.isolation) and may not read anything
+# under /autograder but the library.
 set -u
 ROOT="${{AUTOGRADER_ROOT:-/autograder}}"
 SOURCE="$ROOT/source"
@@ -62,8 +63,10 @@ RESULTS="$ROOT/results/results.json"
 mkdir -p "$ROOT/results"
 rm -f "$RESULTS"
 export PYTHONPATH="$SOURCE${{PYTHONPATH:+:$PYTHONPATH}}"
+# --isolation auto: the namespace sandbox where the container allows it, else a uid of its own,
+# Landlock and limits; results.json's output says which layers were active
 "$PYTHON" -m particles grade "$ROOT/submission" --root "$SOURCE" --gradescope "$RESULTS" \\
-    --private "$ROOT" --jobs 1{exercise_arg}
+    --private "$ROOT" --jobs 1 --isolation auto{exercise_arg}
 status=$?
 if [ ! -s "$RESULTS" ]; then
     printf '{{"score": 0, "output": "The autograder could not grade this submission (status %s). Please tell the instructors.", "tests": []}}\\n' "$status" > "$RESULTS"

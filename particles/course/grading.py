@@ -1,10 +1,11 @@
-"""The grading driver: ``particles grade SUBMISSION... --out DIR --jobs N``.
+"""The grading driver: ``particles grade SUBMISSION... --out DIR --jobs N [--resume]``.
 
 Notebooks of one exercise are graded in batches by ``pytest`` processes that
 run ``tests/exercises/test_NN_topic.py`` with the plugin of
 :mod:`particles.course.plugin`; for each notebook such a process starts a
 worker that runs the student's code. So three processes stand between a
-submission and the gradebook: the worker (untrusted, limited, killed on a
+submission and the gradebook: the worker (untrusted, walled in by the
+operating system, see :mod:`particles.course.isolation`, killed on a
 timeout, one per notebook), the pytest session (trusted tests comparing with
 the reference library) and this driver, which only reads JSON records. If a
 pytest session stops early (it should not), the notebooks it had not finished
@@ -15,163 +16,80 @@ sessions at a time.
 
 The driver trusts a session's records only when pytest ended normally
 (exit status 0 or 1) and the records file carries the signature of a key
-that only the driver and that session know (:data:`TOKEN_FD`): a submission
-that got out of its worker's walls and forged the file, or killed the
-session, loses its records (and its classmates in the same batch are graded
-again on their own). Workers may not read the submissions, the output folder
-or the course folder.
+that only the driver and that session know (:mod:`particles.course.signing`).
 
-Submissions and students:
+What the driver does against a submission that gets out of its worker:
 
-* a notebook given on the command line is one submission; the student is its
-  file name without ``.ipynb``;
-* a folder: notebooks directly inside it are graded the same way; notebooks
-  in sub-folders belong to the student named by the first sub-folder (the
-  layout of an export with one folder per student).
+* it decides the walls once (``--isolation auto|strict``) and every record
+  says which were active;
+* it imports everything it needs before the first worker starts, turns off
+  its own ``PR_SET_DUMPABLE``, gives its sessions a private bytecode cache
+  (``PYTHONPYCACHEPREFIX``, so a planted ``.pyc`` in the library is never
+  loaded), and checks at the end that the installed library is unchanged
+  (:class:`LibraryChanged` otherwise: the run fails loudly);
+* it writes each notebook's record as soon as its batch is done
+  (``DIR/records/``), so a run that is stopped anyway keeps them and
+  ``--resume`` grades only the rest (:mod:`particles.course.store`).
 
-The exercise of a notebook is read from its metadata (written by
-``particles release``), else from its file name (``..._00_warmup...``), else
-from ``--exercise``, which also overrides both. A student with several
-notebooks of one exercise gets one graded (the one named exactly
-``NN_topic.ipynb``, else the newest); the others are reported.
+Which notebooks are graded, and as which student and exercise, is decided in
+:mod:`particles.course.discovery`.
 """
 
-import hashlib
-import hmac
 import json
 import math
 import os
-import re
 import secrets
+import stat
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
 from pathlib import Path
 
+from . import isolation as isolation_module
+from .discovery import Unit, find_submissions, notebook_digest, written_answers
 from .paths import exercise_tests, project_root
-from .reports import feedback_markdown, gradescope_results, write_gradebook, write_json
 from .process import library_parent
+from .reports import feedback_markdown, gradescope_results, write_gradebook, write_json
 from .runner import check_limit
+from .signing import TOKEN_FD, read_records, sign_records
+from .store import RecordStore
 
 __all__ = ["Unit", "find_submissions", "grade_batch", "grade_unit", "grade", "catalog", "read_records",
-           "sign_records", "TOKEN_FD", "written_answers"]
-
-TOKEN_FD = "PARTICLES_GRADING_TOKEN_FD"
-"""Environment variable of a pytest session naming an inherited pipe that holds its signing key.
-
-:func:`grade_batch` makes a new random key per session, writes it into a
-pipe, closes its end and starts pytest with the other end inherited; the
-plugin reads the key at start-up, before any worker exists, closes the pipe
-and signs its records with it (:func:`sign_records`). The key lives only in
-the memory of the driver and of the session: the variable holds a file
-descriptor number, and workers get a clean environment and no inherited
-descriptors (:class:`particles.course.process.Worker`)."""
+           "sign_records", "TOKEN_FD", "written_answers", "LibraryChanged"]
 
 
-def sign_records(body, token):
-    """The signature of a records file's `body` (str): hex HMAC-SHA256 under the session's key `token` (bytes)."""
-    return hmac.new(token, body.encode("utf-8"), hashlib.sha256).hexdigest()
+class LibraryChanged(RuntimeError):
+    """The installed library changed while grading: the grades of the run must not be trusted.
 
-
-def read_records(path, token):
-    """The submissions of a signed records file (id -> record), or None when it is missing, unsigned or altered.
-
-    Parameters
+    Attributes
     ----------
-    path : path
-        The file the pytest session wrote (``--grading-results``).
-    token : bytes
-        The session's key (see :data:`TOKEN_FD`).
+    changed : list of str
+        The files (relative to the package) that differ.
+    summary : dict
+        What :func:`grade` would have returned.
     """
+
+    def __init__(self, changed, summary):
+        self.changed, self.summary = list(changed), summary
+        shown = ", ".join(self.changed[:5]) + (" ..." if len(self.changed) > 5 else "")
+        super().__init__(f"the installed library changed during grading ({len(self.changed)} file(s): {shown}); "
+                         "do not trust these grades: reinstall the package and grade again")
+
+
+def _private_folder(name):
+    """A folder only this user may enter, kept between runs (made anew if it is not safely ours)."""
+    folder = Path(tempfile.gettempdir()) / f"{name}-{os.geteuid()}"
     try:
-        signed = json.loads(Path(path).read_text())
-        body, signature = signed["body"], signed["signature"]
-        if not (isinstance(body, str) and isinstance(signature, str)
-                and hmac.compare_digest(sign_records(body, token), signature)):
-            return None
-        return {str(s["id"]): s for s in json.loads(body)["submissions"]}
-    except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError):
-        return None
-
-
-@dataclass
-class Unit:
-    """One notebook to grade: who submitted it, which exercise it is."""
-
-    student: str
-    exercise: str
-    notebook: Path
-
-
-def _exercise_of(notebook, exercises, override=None):
-    if override:
-        return override
-    try:
-        meta = json.loads(Path(notebook).read_text(encoding="utf-8")).get("metadata", {})
-        name = meta.get("particles", {}).get("exercise")
-        if name in exercises:
-            return name
-    except (OSError, UnicodeDecodeError, ValueError, AttributeError):
+        folder.mkdir(mode=0o700)
+    except FileExistsError:
         pass
-    for name in sorted(exercises, key=len, reverse=True):
-        if name in Path(notebook).stem:
-            return name
-    return None
-
-
-def _student_name(text):
-    return re.sub(r"[^\w.@+-]+", "_", text).strip("_") or "submission"
-
-
-def _preference(unit):
-    """Which of two notebooks of one student and exercise to grade: the exact name, then the newest."""
-    path = Path(unit.notebook)
-    return (path.name == f"{unit.exercise}.ipynb", path.stat().st_mtime)
-
-
-def find_submissions(paths, exercises, exercise=None):
-    """Expand notebooks and folders into :class:`Unit` s and a list of problems.
-
-    Returns
-    -------
-    units : list of Unit
-    problems : list of str
-        Notebooks whose exercise could not be told, and paths that do not exist.
-    """
-    units, problems = [], []
-    for given in map(Path, paths):
-        if given.is_file():
-            found = [(given, given.stem)]
-        elif given.is_dir():
-            found = []
-            for nb in sorted(given.rglob("*.ipynb")):
-                if ".ipynb_checkpoints" in nb.parts:
-                    continue
-                rel = nb.relative_to(given)
-                found.append((nb, rel.parts[0] if len(rel.parts) > 1 else nb.stem))
-        else:
-            problems.append(f"{given} does not exist")
-            continue
-        for nb, student in found:
-            name = _exercise_of(nb, exercises, exercise)
-            if name is None:
-                problems.append(f"{nb}: cannot tell which exercise this is; pass --exercise")
-                continue
-            units.append(Unit(_student_name(student), name, nb))
-    chosen = {}
-    for unit in units:  # one notebook per student and exercise: the exact name, else the newest
-        key = (unit.student, unit.exercise)
-        if key not in chosen:
-            chosen[key] = unit
-            continue
-        keep, drop = sorted([chosen[key], unit], key=_preference, reverse=True)
-        chosen[key] = keep
-        problems.append(f"{drop.notebook}: {unit.student} has several notebooks for {unit.exercise}; "
-                        f"graded {keep.notebook}")
-    return list(chosen.values()), problems
+    info = os.lstat(folder)
+    if not stat.S_ISDIR(info.st_mode) or info.st_uid != os.geteuid() or info.st_mode & 0o077:
+        return Path(tempfile.mkdtemp(prefix=f"{name}-"))
+    return folder
 
 
 def _pytest_command(python, root, test_file, extra):
@@ -184,7 +102,9 @@ def _environment(root):
     parent = library_parent()
     env["PYTHONPATH"] = parent + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     env["PARTICLES_COURSE_ROOT"] = str(root)
-    env["PYTHONDONTWRITEBYTECODE"] = "1"
+    # the sessions' bytecode lives in a folder only the grader may write, never in the library's __pycache__
+    env["PYTHONPYCACHEPREFIX"] = str(_private_folder("particles-grader-pycache"))
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
     return env
 
 
@@ -201,30 +121,6 @@ def catalog(root, exercise, public_only=False, python=None):
             return json.loads(out.read_text())
         except (OSError, ValueError):
             raise RuntimeError(f"cannot collect the tests of {test_file}; run pytest on it to see why") from None
-
-
-def _answer_prompts(notebook):
-    """Markdown cells of a notebook that still hold the release's answer prompt (0 if unreadable)."""
-    from .release import ANSWER_PROMPT
-
-    try:
-        cells = json.loads(Path(notebook).read_text(encoding="utf-8")).get("cells", [])
-        sources = ["".join(c.get("source", "")) if isinstance(c.get("source"), list) else str(c.get("source", ""))
-                   for c in cells if isinstance(c, dict) and c.get("cell_type") == "markdown"]
-    except (OSError, UnicodeDecodeError, ValueError, AttributeError, TypeError):
-        return 0
-    return sum(source.count(ANSWER_PROMPT) for source in sources)
-
-
-def written_answers(notebook, root, exercise):
-    """The written (hand-graded) answers of a submission: ``{"asked": M, "answered": k}``.
-
-    ``asked`` counts the answer prompts of the released ``exercises/NN_topic.ipynb``;
-    a prompt still present in the submission is unanswered. The autograder does
-    not score these answers: the count tells the instructor what is left to read.
-    """
-    asked = _answer_prompts(Path(root) / "exercises" / f"{exercise}.ipynb")
-    return {"asked": asked, "answered": max(asked - _answer_prompts(notebook), 0)}
 
 
 def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None):
@@ -248,13 +144,16 @@ def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None):
     if written and written["asked"]:
         notes.append(f"Written answers: {written['answered']} of {written['asked']} filled in; they are read "
                      "and graded by your instructor, not by the autograder")
+    layers = data.get("isolation") or {}
     return {"student": unit.student, "exercise": unit.exercise, "notebook": str(unit.notebook), "seed": seed,
             "seconds": round(data.get("seconds", seconds), 2), "tests": records, "notes": notes,
-            "written_answers": written, "grader_status": status, "complete": "seconds" in data}
+            "written_answers": written, "grader_status": status, "complete": "seconds" in data,
+            "isolation": layers, "sandbox": isolation_module.describe(layers),
+            "notebook_sha256": notebook_digest(unit.notebook)}
 
 
 def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, memory_mb=None, private=(),
-                python=None, log=None, tests=None, timeout=None):
+                python=None, log=None, tests=None, timeout=None, isolation=None):
     """Grade notebooks of one exercise in one pytest session; never raises on a bad submission.
 
     Each notebook still gets its own worker; only the pytest process (and the
@@ -270,6 +169,9 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
     tests : list of dict, optional
         The exercise's catalog (see :func:`catalog`): tests a notebook has no
         record for are recorded as failed, "not run".
+    isolation : Plan or str, optional
+        The workers' walls (default: the strongest available, see
+        :func:`particles.course.isolation.plan`).
 
     Notes
     -----
@@ -315,6 +217,9 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
         extra += ["--memory-mb", str(math.ceil(memory_mb))] if memory_mb is not None else []
         for path in private:
             extra += ["--private", str(path)]
+        plan = isolation if isinstance(isolation, isolation_module.Plan) else (
+            isolation_module.plan("auto") if isolation is None else isolation_module.Plan.from_option(isolation))
+        extra += ["--isolation", plan.to_option()]
         status, output = None, ""
         key_in, key_out = os.pipe()
         try:
@@ -373,16 +278,18 @@ def _batches(units, jobs, largest=20):
 
 def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=None, time_limit=None,
           memory_mb=None, root=None, private=(), hidden_visibility="after_published", python=None,
-          gradescope=None, progress=None):
+          gradescope=None, progress=None, isolation="auto", resume=False):
     """Grade submissions; write results.json and feedback per student and a gradebook.
 
     Parameters
     ----------
     paths : sequence of path
-        Notebooks, or folders of notebooks (see the module docstring).
+        Notebooks, or folders of notebooks (see :mod:`particles.course.discovery`).
     out : path, optional
         Output folder: ``gradebook.csv``, ``<student>/results.json``,
-        ``<student>/feedback.md`` and ``logs/``. Nothing is written without it.
+        ``<student>/feedback.md``, ``records/`` (one record per notebook,
+        written as soon as it is graded) and ``logs/``. Nothing is written
+        without it.
     jobs : int
         Notebooks graded at the same time (each takes one core).
     exercise : str, optional
@@ -407,18 +314,33 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         notebooks graded here (one Gradescope submission).
     progress : callable, optional
         Called with each per-exercise result as it completes.
+    isolation : {"auto", "strict"}
+        The workers' operating-system walls: ``auto`` uses the strongest this
+        machine allows, ``strict`` refuses to grade without the namespace
+        sandbox (see :mod:`particles.course.isolation`).
+    resume : bool
+        Keep the records already in ``out/records/`` of notebooks that have
+        not changed since (same bytes, same options) and grade only the rest.
 
     Returns
     -------
     dict
         ``students`` (student -> list of per-exercise results), ``exercises``
-        (names graded, in order) and ``problems`` (notebooks not graded).
+        (names graded, in order), ``problems`` (notebooks not graded),
+        ``isolation`` (one line: the walls the workers had), ``resumed``
+        (how many records were kept from an earlier run).
 
     Raises
     ------
     ValueError
         On bad arguments (no exercise tests found, unknown exercise, jobs < 1,
-        a `time_limit` or `memory_mb` that is not a finite number > 0).
+        a `time_limit` or `memory_mb` that is not a finite number > 0, an
+        unknown isolation mode, `resume` without `out`).
+    particles.course.isolation.IsolationUnavailable
+        When `isolation` is ``strict`` and the namespace sandbox cannot start.
+    LibraryChanged
+        When the installed library is not the same at the end of the run as
+        at its start (after the outputs are written, marked as untrusted).
     """
     root = Path(root).resolve() if root else project_root()
     tests = exercise_tests(root)
@@ -428,8 +350,14 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         raise ValueError(f"unknown exercise {exercise!r}; expected one of {', '.join(map(repr, tests))}")
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
         raise ValueError(f"jobs must be a positive integer, got {jobs!r}")
+    if resume and out is None:
+        raise ValueError("resume needs out: the folder whose records/ an earlier run wrote")
     time_limit = None if time_limit is None else check_limit("time_limit", time_limit)
     memory_mb = None if memory_mb is None else check_limit("memory_mb", memory_mb)
+    # ValueError or IsolationUnavailable before anything is graded (a Plan itself: for tests and benchmarks)
+    plan = isolation if isinstance(isolation, isolation_module.Plan) else isolation_module.plan(isolation)
+    isolation_module.protect_this_process()
+    before = isolation_module.library_checksum()  # everything the driver needs is imported by now
     units, problems = find_submissions(paths, list(tests), exercise)
     if out is not None:
         out = Path(out)
@@ -438,48 +366,96 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     # its own code from the grader, so it never needs to read its notebook either
     private = [*map(str, private), *(str(Path(p).resolve()) for p in paths if Path(p).exists())]
     private += [str(out.resolve())] if out is not None else []
+    options = {"public_only": bool(public_only), "seed": seed, "time_limit": time_limit, "memory_mb": memory_mb}
+    store = RecordStore(out / "records", options) if out is not None else None
+    done = {}
+    if resume:
+        for unit in units:
+            kept = store.load(unit)
+            if kept is not None:
+                done[(unit.student, unit.exercise)] = kept
+    todo = [u for u in units if (u.student, u.exercise) not in done]
+    lock = threading.Lock()
+
+    def finished(results):
+        with lock:
+            for result in results:
+                done[(result["student"], result["exercise"])] = result
+                if store is not None:
+                    store.save(result)
+            if out is not None:  # what a stopped run leaves is already usable
+                _write_outputs(out, done, tests, hidden_visibility, students=[r["student"] for r in results])
+        if progress is not None:
+            for result in results:
+                progress(result)
 
     def work(batch):
         k = batches.index(batch)
         log = out / "logs" / f"batch{k:03d}-{batch[0].exercise}.log" if out is not None else None
         seeds = [seed if seed is not None else secrets.randbelow(2**31) for _ in batch]
         results = grade_batch(batch, root, seeds=seeds, public_only=public_only, time_limit=time_limit,
-                              memory_mb=memory_mb, private=private, python=python, log=log)
+                              memory_mb=memory_mb, private=private, python=python, log=log, isolation=plan)
         if len(batch) > 1:  # a session that stopped early: grade its unfinished notebooks alone
             for i, (unit, result) in enumerate(zip(batch, results)):
                 if not result["complete"]:
                     retry_log = out / "logs" / f"{unit.student}-{unit.exercise}.log" if out is not None else None
                     results[i] = grade_unit(unit, root, seed=seeds[i], public_only=public_only,
                                             time_limit=time_limit, memory_mb=memory_mb, private=private,
-                                            python=python, log=retry_log)
-        if progress is not None:
-            for result in results:
-                progress(result)
+                                            python=python, log=retry_log, isolation=plan)
+        finished(results)
         return results
 
-    batches = _batches(units, jobs)
+    batches = _batches(todo, jobs)
     with ThreadPoolExecutor(max_workers=jobs) as pool:
-        results = [r for batch_results in pool.map(work, batches) for r in batch_results]
+        list(pool.map(work, batches))
+    results = [done[(u.student, u.exercise)] for u in units]
     students = {}
     for result in results:
         students.setdefault(result["student"], []).append(result)
     exercises = [name for name in tests if any(u.exercise == name for u in units)]
+    layers = [r.get("isolation") for r in results if r.get("isolation")]
+    summary = {"students": students, "exercises": exercises, "problems": problems,
+               "isolation": isolation_module.describe(layers[0] if layers else {}) if results else
+               f"planned: {plan.to_option()}", "resumed": len(units) - len(todo)}
+    changed = isolation_module.library_changes(before)
     if out is not None:
-        for student, per_exercise in students.items():
-            folder = out / student
-            folder.mkdir(parents=True, exist_ok=True)
-            write_json(folder / "results.json", gradescope_results(student, per_exercise, hidden_visibility))
-            (folder / "feedback.md").write_text(feedback_markdown(student, per_exercise))
-        write_gradebook(out / "gradebook.csv", students, exercises)
+        _write_outputs(out, done, tests, hidden_visibility)
+        if changed:
+            (out / "LIBRARY-CHANGED.txt").write_text(
+                "The installed particles library changed while these submissions were graded:\n"
+                + "".join(f"  {name}\n" for name in changed) + "Do not trust these grades.\n")
     if gradescope is not None:
         if not results and exercise is not None:  # nothing gradable was submitted: every test fails, saying why
             why = "no notebook for this exercise was found in your submission" if not problems else problems[0]
             tests_of = catalog(root, exercise, public_only, python)
             results = [{"student": "submission", "exercise": exercise, "notebook": "", "seed": None, "seconds": 0.0,
-                        "tests": [dict(t, passed=False, reason=why) for t in tests_of], "notes": []}]
+                        "tests": [dict(t, passed=False, reason=why) for t in tests_of], "notes": [],
+                        "sandbox": summary["isolation"]}]
         data = gradescope_results("submission", results, hidden_visibility)
         if problems:
             data["output"] = "\n".join([data["output"], *problems]).strip()
+        if changed:  # a compromised container: no score is better than a forged one
+            data = {"score": 0, "output": "The autograder's own files changed while grading this submission; "
+                    "it was not graded. Please tell the instructors.", "tests": [], "visibility": "visible"}
         Path(gradescope).parent.mkdir(parents=True, exist_ok=True)
         write_json(gradescope, data)
-    return {"students": students, "exercises": exercises, "problems": problems}
+    if changed:
+        raise LibraryChanged(changed, summary)
+    return summary
+
+
+def _write_outputs(out, done, tests, hidden_visibility, students=None):
+    """results.json and feedback.md of `students` (default: all), and the gradebook, from the records so far."""
+    by_student = {}
+    for (student, _), result in done.items():
+        by_student.setdefault(student, []).append(result)
+    order = {name: k for k, name in enumerate(tests)}
+    for results in by_student.values():
+        results.sort(key=lambda r: order.get(r["exercise"], len(order)))
+    for student in (by_student if students is None else set(students)):
+        folder = out / student
+        folder.mkdir(parents=True, exist_ok=True)
+        write_json(folder / "results.json", gradescope_results(student, by_student[student], hidden_visibility))
+        (folder / "feedback.md").write_text(feedback_markdown(student, by_student[student]))
+    exercises = [name for name in tests if any(r["exercise"] == name for rs in by_student.values() for r in rs)]
+    write_gradebook(out / "gradebook.csv", by_student, exercises)

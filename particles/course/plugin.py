@@ -34,7 +34,10 @@ one after the other in this session, each by its own worker: the pytest
 start-up and the reference library are paid once per batch),
 ``--time-limit`` (the per-call limit of the tests without a ``time_limit``
 marker: a marker wins), ``--memory-mb``, ``--private PATH`` (more paths the
-submission may not read). Without them, ``pytest tests/exercises`` grades
+submission may not read), ``--isolation`` (the workers' operating-system
+walls, see :mod:`particles.course.isolation`: ``auto``, ``strict`` or the
+layers the driver chose; the layers each worker really had go into the
+submission's record). Without them, ``pytest tests/exercises`` grades
 the masters, which must score full marks.
 
 When the driver passes a signing key (see
@@ -55,7 +58,8 @@ import numpy as np
 import pytest
 
 from .code import SubmissionCode, notebook_cells
-from .grading import TOKEN_FD, sign_records
+from .isolation import Plan, protect_this_process
+from .signing import TOKEN_FD, sign_records
 from .paths import project_root
 from .runner import GradingFailure, Submission, check_limit
 
@@ -91,6 +95,8 @@ def pytest_addoption(parser):
     group.addoption("--memory-mb", type=int, default=None, help="memory a submission may use, MiB")
     group.addoption("--private", action="append", default=[], help="another path a submission may not read")
     group.addoption("--grading-catalog", default=None, help="write the collected tests (name, points, visibility) here")
+    group.addoption("--isolation", default="auto",
+                    help="the workers' operating-system walls: auto, strict, or a list such as namespaces,uid,landlock")
 
 
 def pytest_configure(config):
@@ -109,6 +115,8 @@ def pytest_configure(config):
         jobs = [{"id": "0", "notebook": config.getoption("--submission", default=None), "seed": seed}]
     config._particles_jobs = jobs
     config._particles_token = _read_token()
+    protect_this_process()  # no process of the same uid may read this session's memory or environment
+    config._particles_plan = None
     config._particles_seed = seed
     config._particles_results = {job["id"]: {"id": job["id"], "seed": job["seed"], "tests": []} for job in jobs}
 
@@ -189,8 +197,10 @@ def _particles_submission(request, _particles_job):
         problem = None
     except ValueError as error:
         code, problem = SubmissionCode(), f"your notebook could not be read: {error}"
+    if config._particles_plan is None:
+        config._particles_plan = Plan.from_option(config.getoption("--isolation"))
     submission = Submission(
-        code, forbidden=getattr(module, "FORBIDDEN", {}), deny=deny,
+        code, forbidden=getattr(module, "FORBIDDEN", {}), deny=deny, isolation=config._particles_plan,
         time_limit=config.getoption("--time-limit"), memory_mb=config.getoption("--memory-mb"),
     )
     submission.load_failure = problem
@@ -203,6 +213,7 @@ def _particles_submission(request, _particles_job):
         load_errors=submission.load_errors,
         skipped=[{"label": s.label, "line": s.line, "text": s.text, "reason": s.reason} for s in submission.code.skipped],
         syntax_errors=[list(e) for e in submission.code.syntax_errors],
+        isolation=dict(submission.layers or {}, planned=config._particles_plan.to_option()),
         seconds=round(time.perf_counter() - start, 3),
     )
 

@@ -18,8 +18,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from . import isolation as walls
 from .protocol import ProtocolError, read_frame, write_frame
-from .worker import BOOTSTRAP
+from .worker import BOOTSTRAP, UID_VARIABLE
 
 __all__ = ["Worker", "WorkerDied", "WorkerTimeout", "library_parent"]
 
@@ -35,6 +36,8 @@ class WorkerDied(RuntimeError):
         self.returncode = returncode
         super().__init__(f"worker ended with exit status {returncode}")
 
+
+_LIVE = set()  # pids of the workers this process has running (never taken for orphans)
 
 _MPL_CACHE = None
 
@@ -80,30 +83,66 @@ class Worker:
         The Python interpreter (default: the grader's).
     """
 
-    def __init__(self, scratch, config, python=None, start_timeout=30.0):
+    def __init__(self, scratch, config, python=None, start_timeout=30.0, isolation=None):
         self.scratch = Path(scratch)
         self.scratch.mkdir(parents=True, exist_ok=True)
         (self.scratch / ".matplotlib").mkdir(exist_ok=True)
         for font_list in _matplotlib_cache():
             shutil.copyfile(font_list, self.scratch / ".matplotlib" / font_list.name)
-        self.config = dict(config, scratch=str(self.scratch))
+        self.plan = isolation if isolation is not None else walls.plan("auto")
+        self.evaluate = None  # set by the caller: answers the worker's {"op": "evaluate"} frames
+        self.lease = walls.UidLease() if self.plan.separate_uid else None
+        self.layers = {}
+        library = Path(library_parent()) / "particles"
+        self.config = dict(config, scratch=str(self.scratch), namespaces=self.plan.namespaces,
+                           landlock=self.plan.landlock, read=walls.read_paths(library),
+                           uid=None if self.lease is None else self.lease.uid,
+                           nproc=walls.NPROC if self.lease is not None else 1)
+        if self.lease is not None:  # its folder is its own, and no one else's
+            for path in [self.scratch, *self.scratch.rglob("*")]:
+                os.chown(path, self.lease.uid, self.lease.uid)
+            os.chmod(self.scratch, 0o700)
         env = {
             "PATH": os.environ.get("PATH", os.defpath), "HOME": str(self.scratch), "TMPDIR": str(self.scratch),
             "MPLCONFIGDIR": str(self.scratch / ".matplotlib"), "MPLBACKEND": "Agg", "LANG": "C.UTF-8",
             "PYTHONDONTWRITEBYTECODE": "1", "PYTHONPATH": library_parent(), "PYTHONNOUSERSITE": "1",
             "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
         }
-        self.process = subprocess.Popen(
-            [python or sys.executable, "-c", BOOTSTRAP, str(self.scratch / "stdout.txt")],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-            cwd=self.scratch, env=env, start_new_session=True,
-        )
+        if self.lease is not None:
+            env[UID_VARIABLE] = str(self.lease.uid)
+        # without a PID namespace or a uid of its own, what the worker leaves behind is adopted by the grader
+        self.reaps = not self.plan.namespaces and self.lease is None and walls.become_subreaper()
+        command = [python or sys.executable, "-c", BOOTSTRAP, str(self.scratch / "stdout.txt")]
+        if self.plan.namespaces:
+            command = walls.bwrap_command(self.plan.bwrap, self.scratch, library, root=self.lease is not None
+                                          or os.geteuid() == 0) + command
+        try:
+            self.process = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                            stderr=None if os.environ.get("PARTICLES_WORKER_STDERR") else subprocess.DEVNULL, cwd=self.scratch, env=env,
+                                            start_new_session=True)
+        except BaseException:
+            self._release()
+            raise
+        _LIVE.add(self.process.pid)
         self._out = self.process.stdout.fileno()
         try:
-            self.request(self.config, start_timeout, send=True)
+            reply = self.request(self.config, start_timeout, send=True)
         except BaseException:
             self.kill()
             raise
+        self.layers = dict(reply.get("layers") or {}) if isinstance(reply, dict) else {}
+
+    @property
+    def returncode(self):
+        """The worker's exit status as Python reports it (-N: killed by signal N), also through bubblewrap.
+
+        bubblewrap ends with status 128 + N when the process it runs is
+        killed by signal N.
+        """
+        code = self.process.returncode
+        if self.plan.namespaces and code is not None and 128 < code < 128 + 65:
+            return -(code - 128)
+        return code
 
     @property
     def alive(self):
@@ -141,19 +180,35 @@ class Worker:
         try:
             if send:
                 write_frame(self.process.stdin.fileno(), message)
-            return read_frame(lambda n: self._read_exactly(n, deadline))
+            while True:
+                reply = read_frame(lambda n: self._read_exactly(n, deadline))
+                if not (isinstance(reply, dict) and reply.get("op") == "evaluate"):
+                    return reply
+                # the student's code calls a function the grader evaluates (and counts): answer, keep waiting
+                answer = self.evaluate(reply) if self.evaluate is not None else {"ok": False, "error": "not expected"}
+                write_frame(self.process.stdin.fileno(), answer, strict=False)
         except WorkerTimeout:
             self.kill()
             raise
         except (EOFError, BrokenPipeError):
             self.kill()
-            raise WorkerDied(self.process.returncode) from None
+            raise WorkerDied(self.returncode) from None
         except ProtocolError:
             self.kill()
             raise
 
+    def _release(self):
+        if self.lease is not None:  # kills every process of its uid, wherever it went
+            self.lease.release()
+            self.lease = None
+
     def kill(self):
-        """End the worker and everything it started (its process group)."""
+        """End the worker and everything it started.
+
+        Its process group; with namespaces the whole sandbox (its PID
+        namespace ends with its first process); with a uid of its own every
+        process of that uid, also those that left the process group.
+        """
         if self.process.poll() is None:
             try:
                 os.killpg(self.process.pid, signal.SIGKILL)
@@ -163,6 +218,10 @@ class Worker:
             self.process.wait(timeout=10)
         except subprocess.TimeoutExpired:
             pass
+        _LIVE.discard(self.process.pid)
+        if self.reaps:
+            walls.kill_orphans(keep=_LIVE)
+        self._release()
         for stream in (self.process.stdin, self.process.stdout):
             try:
                 stream.close()

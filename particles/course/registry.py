@@ -20,7 +20,7 @@ import numpy as np
 
 from ..problems import PROBLEMS, get_problem
 
-__all__ = ["RemoteFunction", "remote", "build", "CountingFunction"]
+__all__ = ["RemoteFunction", "remote", "build", "CountingFunction", "GraderFunction"]
 
 _ATTRIBUTES = ("f", "exact")
 
@@ -30,6 +30,8 @@ def _check_spec(spec):
         raise ValueError(f"spec must be a dict with kind 'problem', got {spec!r}")
     if spec.get("name") not in PROBLEMS:
         raise ValueError(f"unknown problem {spec.get('name')!r}; expected one of {', '.join(map(repr, PROBLEMS))}")
+    if spec.get("evaluate", "worker") not in ("worker", "grader"):
+        raise ValueError(f"evaluate must be 'worker' or 'grader', got {spec.get('evaluate')!r}")
     if spec.get("attr", "f") not in _ATTRIBUTES:
         raise ValueError(f"attr must be one of {_ATTRIBUTES}, got {spec.get('attr')!r}")
     if not isinstance(spec.get("params", {}), dict):
@@ -51,8 +53,43 @@ class CountingFunction:
         return f"<{self.spec['name']}({params}).{self.spec.get('attr', 'f')}>"
 
 
+EVALUATE = None
+"""In a worker: the function that sends an evaluation to the grader (set by the worker's server).
+
+Called as ``EVALUATE(spec, args, kwargs)``; returns the value the grader computed."""
+
+
+class GraderFunction:
+    """A registry function evaluated by the grader, not in the worker: the grader counts its calls.
+
+    A submission cannot change that count: every call is a round trip to the
+    grader's process (``{"op": "evaluate"}`` frames, see
+    :class:`particles.course.process.Worker`), which computes the value and
+    counts the call on its side. Slower than a :class:`CountingFunction`
+    (about a tenth of a millisecond per call), so tests use it for the few
+    calls whose number is the point (evaluations per step).
+    """
+
+    __slots__ = ("spec",)
+
+    def __init__(self, spec):
+        self.spec = spec
+
+    def __call__(self, *args, **kwargs):
+        if EVALUATE is None:
+            raise RuntimeError("this function is evaluated by the grader, which is not connected")
+        return EVALUATE(self.spec, args, kwargs)
+
+    def __repr__(self):
+        params = ", ".join(f"{k}={v!r}" for k, v in self.spec.get("params", {}).items())
+        return f"<{self.spec['name']}({params}).{self.spec.get('attr', 'f')}>"
+
+
 def build(spec):
-    """The function described by `spec`, wrapped in a :class:`CountingFunction`.
+    """The function described by `spec`: a :class:`CountingFunction`, or a :class:`GraderFunction`.
+
+    A spec with ``"evaluate": "grader"`` (a :class:`RemoteFunction` made with
+    ``counted=True``) becomes a :class:`GraderFunction` in a worker.
 
     Raises
     ------
@@ -61,6 +98,8 @@ def build(spec):
     """
     _check_spec(spec)
     problem = get_problem(spec["name"], **spec.get("params", {}))
+    if spec.get("evaluate") == "grader" and EVALUATE is not None:
+        return GraderFunction(spec)
     return CountingFunction(getattr(problem, spec.get("attr", "f")), spec)
 
 
@@ -73,15 +112,22 @@ class RemoteFunction:
         A key of :data:`particles.problems.PROBLEMS`.
     attr : str
         ``"f"`` (the right-hand side ``f(X, t)``) or ``"exact"``.
+    counted : bool
+        Evaluate it in the grader, which counts the calls (see
+        :class:`GraderFunction`); the worker cannot change that count.
     **params
         Parameters of the problem factory (numbers or lists of numbers).
     """
 
-    def __init__(self, name, attr="f", **params):
+    def __init__(self, name, attr="f", counted=False, **params):
         params = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in params.items()}
         params = {k: (float(v) if isinstance(v, np.floating) else v) for k, v in params.items()}
         self.__remote_spec__ = {"kind": "problem", "name": name, "params": params, "attr": attr}
-        self._local = build(self.__remote_spec__)
+        if counted:
+            self.__remote_spec__["evaluate"] = "grader"
+        self.counted = bool(counted)
+        _check_spec(self.__remote_spec__)
+        self._local = CountingFunction(getattr(get_problem(name, **params), attr), self.__remote_spec__)
 
     @property
     def problem(self):
@@ -96,6 +142,6 @@ class RemoteFunction:
         return repr(self._local)
 
 
-def remote(name, attr="f", **params):
+def remote(name, attr="f", counted=False, **params):
     """Shorthand for :class:`RemoteFunction`: ``remote("harmonic_oscillator", omega=2.0)``."""
-    return RemoteFunction(name, attr, **params)
+    return RemoteFunction(name, attr, counted, **params)

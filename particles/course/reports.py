@@ -49,6 +49,8 @@ def gradescope_results(student, results, hidden_visibility="after_published"):
         score, top = score_of(result["tests"])
         lines.append(f"{result['exercise']}: {_fmt(score)} / {_fmt(top)} points")
         lines += [f"  {note}" for note in result.get("notes", [])]
+        if result.get("sandbox"):
+            lines.append(f"  Sandbox of your code: {result['sandbox']}")
         for k, test in enumerate(result["tests"], start=1):
             tests.append({
                 "name": f"{result['exercise']}: {test['name']}",
@@ -69,7 +71,8 @@ def gradescope_results(student, results, hidden_visibility="after_published"):
         "output": "\n".join(lines),
         "visibility": "visible",
         "stdout_visibility": "hidden",
-        "extra_data": {"student": student, "seeds": {r["exercise"]: r.get("seed") for r in results}},
+        "extra_data": {"student": student, "seeds": {r["exercise"]: r.get("seed") for r in results},
+                       "sandbox": {r["exercise"]: r.get("isolation", {}) for r in results}},
         "tests": tests,
     }
 

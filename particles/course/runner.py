@@ -12,8 +12,11 @@ returned something the protocol cannot carry. After a timeout or a crash the
 worker is killed and the next call starts a fresh one.
 """
 
+import copy
+import functools
 import math
 import numbers
+import os
 import shutil
 import signal
 import tempfile
@@ -21,9 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
+from . import isolation as walls
 from .code import SubmissionCode, read_submission
 from .process import Worker, WorkerDied, WorkerTimeout
 from .protocol import ProtocolError, Unsupported
+from .registry import RemoteFunction
 
 __all__ = ["GradingFailure", "Submission", "DEFAULTS", "describe_value", "check_limit"]
 
@@ -111,6 +116,14 @@ class Submission:
         finite number > 0.
     scratch : path, optional
         Parent of the workers' scratch folders (default: a new temporary folder).
+    isolation : Plan or str, optional
+        The operating system's walls (see :mod:`particles.course.isolation`):
+        a :class:`~particles.course.isolation.Plan`, ``"auto"`` (default: the
+        strongest available), ``"strict"`` or a list of layers such as
+        ``"no-namespaces,uid,landlock"``.
+    audit_hook : bool
+        Install the worker's audit hook (default). Only the tests of the
+        operating system's walls switch it off, to show that they hold alone.
 
     Raises
     ------
@@ -124,14 +137,22 @@ class Submission:
     code : SubmissionCode
     restarts : int
         How many workers were started (1 when nothing went wrong).
+    layers : dict
+        The walls active in the last worker (reported by the worker itself,
+        see :func:`particles.course.isolation.describe`).
     last : dict
         Details of the last successful call: ``seconds``, and ``calls``
         (argument position -> how often the student's code called that
         registry function).
     """
 
-    def __init__(self, source, forbidden=None, deny=(), scratch=None, python=None, **limits):
+    def __init__(self, source, forbidden=None, deny=(), scratch=None, python=None, isolation=None,
+                 audit_hook=True, **limits):
         self.code = source if isinstance(source, SubmissionCode) else read_submission(source)
+        self.plan = walls.plan("auto") if isolation is None else (
+            isolation if isinstance(isolation, walls.Plan) else walls.Plan.from_option(isolation))
+        self.audit_hook = bool(audit_hook)
+        self.layers = {}
         self.forbidden = dict(forbidden or {})
         self.deny = [str(p) for p in deny]
         unknown = sorted(set(limits) - set(DEFAULTS))
@@ -143,6 +164,8 @@ class Submission:
         self.limits = dict(DEFAULTS, **given)
         self._own_scratch = scratch is None
         self.scratch = Path(tempfile.mkdtemp(prefix="particles-grade-") if scratch is None else scratch)
+        if self.plan.separate_uid:  # workers of their own uid must pass through (not list) the parent
+            os.chmod(self.scratch, 0o711)
         self.python = python
         self.worker = None
         self.restarts = 0
@@ -155,16 +178,21 @@ class Submission:
         config = {
             "memory_mb": self.limits["memory_mb"], "cpu_seconds": self.limits["cpu_seconds"],
             "file_mb": self.limits["file_mb"], "deny": self.deny, "forbidden": self.forbidden,
+            "audit_hook": self.audit_hook,
         }
         self.restarts += 1
         scratch = self.scratch / f"worker-{self.restarts}"
         if scratch.exists():
             shutil.rmtree(scratch, ignore_errors=True)
-        self.worker = Worker(scratch, config, python=self.python)
+        self.worker = Worker(scratch, config, python=self.python, isolation=self.plan)
+        self.layers = dict(self.worker.layers)
         chunks = [{"label": c.label, "line": c.line, "source": c.source} for c in self.code.chunks]
         limit = float(self.limits["load_time_limit"])
         try:
-            reply = self.worker.request({"op": "load", "chunks": chunks, "timeout": limit}, limit + 5.0 + _GRACE)
+            # each statement has its own alarm in the worker; this deadline is the backstop for one that
+            # hangs in compiled code, and grows with the number of statements (up to two minutes)
+            deadline = min(limit * max(len(chunks), 1), 120.0) + 5.0 + _GRACE
+            reply = self.worker.request({"op": "load", "chunks": chunks, "timeout": limit}, deadline)
         except WorkerTimeout:
             self.load_failure = f"loading your notebook did not finish within {limit:g} s per statement"
             raise GradingFailure(self.load_failure) from None
@@ -198,10 +226,9 @@ class Submission:
 
     # -- messages ---------------------------------------------------------------------
     def _not_defined(self, name):
-        skipped = self.code.skipped_assignment(name)
-        if skipped is not None:
-            return (f"`{name}` is not defined: the grader did not run `{skipped.text}` ({skipped.label}, line "
-                    f"{skipped.line}) because it is {skipped.reason}; define `{name}` with `def`")
+        why = self.code.explain_missing(name, self.load_errors)  # skipped (and why), or raised while loading
+        if why:
+            return f"`{name}` is not defined: {why}"
         for error in self.load_errors:
             return (f"`{name}` is not defined; loading your notebook failed at {error['label']}"
                     f"{_where(error) and ' (' + error['where'] + ')'}: {error['type']}: {error['message']}")
@@ -215,6 +242,11 @@ class Submission:
         where = _where(error)
         if kind == "NotDefined":
             return self._not_defined(name)
+        if kind == "NameError" and message.startswith("name '") and message.count("'") >= 2:
+            missing = message.split("'")[1]  # a global the function reads: did the grader skip its definition?
+            why = self.code.explain_missing(missing, self.load_errors)
+            if why:
+                return f"`{name}` raised NameError{where}: `{missing}` is not defined: {why}"
         if kind == "Timeout":
             return (f"`{name}` did not finish within {limit:g} s{where} (an endless loop, or far too much work); "
                     "it was stopped")
@@ -275,6 +307,10 @@ class Submission:
         limit = check_limit("timeout" if timeout is not None else "time_limit",
                             self.limits["time_limit"] if timeout is None else timeout)
         self._ensure_worker()
+        counted = {}
+        args = [self._count(key, value, counted) for key, value in enumerate(args)]
+        kwargs = {key: self._count(key, value, counted) for key, value in kwargs.items()}
+        self.worker.evaluate = functools.partial(_evaluate, counted)
         request = {"op": "call", "name": name, "args": list(args), "kwargs": kwargs, "timeout": limit}
         try:
             reply = self.worker.request(request, limit + _GRACE)
@@ -290,8 +326,20 @@ class Submission:
             raise GradingFailure(self._raised(name, reply.get("error", {}), limit))
         if check_inputs:
             self._check_inputs(name, args, kwargs, reply)
-        self.last = {"seconds": reply.get("seconds"), "calls": reply.get("calls", {})}
+        calls = dict(reply.get("calls", {})) if isinstance(reply.get("calls"), dict) else {}
+        calls.update({key: entry[1] for key, entry in counted.items()})  # the grader's own count wins
+        self.last = {"seconds": reply.get("seconds"), "calls": calls}
         value = reply.get("value")
+        return value
+
+    @staticmethod
+    def _count(key, value, counted):
+        """A counted registry function as sent for this call (tagged with its position), else `value`."""
+        if isinstance(value, RemoteFunction) and value.counted:
+            tagged = copy.copy(value)
+            tagged.__remote_spec__ = dict(value.__remote_spec__, key=str(key))
+            counted[str(key)] = [value, 0]
+            return tagged
         return value
 
     def calls_of(self, position):
@@ -312,6 +360,21 @@ class Submission:
                     f"`{name}` modified its input `{label}` in place; leave the arrays it is given unchanged "
                     f"and return a new array (e.g. start from `{label}.copy()` or build the result with `+`)"
                 )
+
+
+def _evaluate(counted, frame):
+    """The grader's answer to a worker's ``{"op": "evaluate"}`` frame: the value, and one more call counted."""
+    spec = frame.get("spec") if isinstance(frame.get("spec"), dict) else {}
+    entry = counted.get(str(spec.get("key")))
+    if entry is None:
+        return {"ok": False, "error": "not a function of this call"}
+    entry[1] += 1
+    args = frame.get("args") if isinstance(frame.get("args"), list) else []
+    kwargs = frame.get("kwargs") if isinstance(frame.get("kwargs"), dict) else {}
+    try:
+        return {"ok": True, "value": entry[0](*args, **kwargs)}
+    except Exception as error:  # bad arguments from the student's code: their error, raised in their code
+        return {"ok": False, "error": f"{type(error).__name__}: {error}"}
 
 
 def describe_value(value):

@@ -444,7 +444,7 @@ def _memory_in_use():
     return 0
 
 
-def set_limits(memory_mb, cpu_seconds, file_mb):
+def set_limits(memory_mb, cpu_seconds, file_mb, nproc=None):
     """Lower this process's resource limits (the worker calls it before any student code runs).
 
     Parameters
@@ -458,6 +458,10 @@ def set_limits(memory_mb, cpu_seconds, file_mb):
     file_mb : float or None
         Largest file the process may write, MiB (``RLIMIT_FSIZE``); a larger
         write fails with ``OSError`` (``SIGXFSZ`` is ignored).
+    nproc : int or None
+        Processes and threads the process's uid may have (``RLIMIT_NPROC``):
+        with a uid of its own, how many the worker may start; with the
+        grader's uid (already running many), none.
 
     Notes
     -----
@@ -482,4 +486,6 @@ def set_limits(memory_mb, cpu_seconds, file_mb):
     if file_mb:
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a too-large write fails with OSError instead of killing
         limit(resource.RLIMIT_FSIZE, int(float(file_mb) * 2**20))
+    if nproc:
+        limit(resource.RLIMIT_NPROC, int(nproc))
     limit(resource.RLIMIT_CORE, 0)

@@ -57,6 +57,9 @@ worker without running ``particles/__init__.py``, which would load SciPy and
 the whole library before any student code asks for it."""
 
 
+UID_VARIABLE = "PARTICLES_WORKER_UID"
+"""Environment variable naming the uid a worker switches to before anything else (when the grader is root)."""
+
 _LABELS = set()  # file names "<code cell 3>" of the submission's statements
 
 
@@ -103,8 +106,14 @@ class _Server:
     def __init__(self, proto_in, proto_out):
         self.proto_in, self.proto_out = proto_in, proto_out
         self.namespace = {"__name__": "submission", "__builtins__": __builtins__}
+        from .ipython_shim import get_ipython_for  # a stand-in shell for the magics, as Jupyter reads them
+
+        self.namespace["get_ipython"] = get_ipython_for(self.namespace)
         import builtins
 
+        from . import registry
+
+        registry.EVALUATE = self.evaluate  # functions the grader evaluates (and counts) on its side
         self.builtins = vars(builtins)
         self.pristine = dict(self.builtins)  # student code may replace builtins the worker itself needs
 
@@ -125,6 +134,20 @@ class _Server:
             chunks.append(chunk)
             remaining -= len(chunk)
         return b"".join(chunks)
+
+    def evaluate(self, spec, args, kwargs):
+        """Have the grader evaluate the registry function `spec` on `args` (one round trip); return its value."""
+        from .protocol import ProtocolError, read_frame, write_frame
+
+        try:
+            write_frame(self.proto_out, {"op": "evaluate", "spec": spec, "args": list(args), "kwargs": dict(kwargs)})
+        except ProtocolError as error:
+            raise TypeError(f"f must be called with numbers and NumPy arrays: {error}") from None
+        answer = read_frame(self.read_exactly)
+        if not isinstance(answer, dict) or not answer.get("ok"):
+            message = answer.get("error") if isinstance(answer, dict) else "no answer"
+            raise ValueError(f"f could not be evaluated: {message}")
+        return answer.get("value")
 
     def reply(self, message):
         from .protocol import write_frame
@@ -217,9 +240,44 @@ class _Server:
                 self.reply({"ok": False, "error": dict(_describe(error), type="UnsendableResult")})
 
 
+def _build_walls(config, scratch):
+    """The operating system's walls, in order, before any student code; returns the layers now active.
+
+    The uid of its own came first (:func:`main`); then the limits, Landlock
+    (it needs no privilege) and ``no_new_privs``. A wall the grader asked for
+    that cannot be built ends the worker: it never runs student code with
+    less than it was told.
+    """
+    from . import kernel as isolation  # the system calls only: the worker needs no more
+
+    sandbox.set_limits(config.get("memory_mb"), config.get("cpu_seconds"), config.get("file_mb"),
+                       config.get("nproc"))
+    layers = {"namespaces": bool(config.get("namespaces")), "rlimits": True, "landlock": 0, "uid": None}
+    if config.get("landlock"):
+        # its own /proc entry (Python and NumPy read a few files there); nothing of any other process
+        read = list(config.get("read", [])) + [f"/proc/{os.getpid()}"]
+        layers["landlock"] = isolation.apply_landlock(read, [scratch, os.devnull])
+    layers["no_new_privs"] = isolation.no_new_privs()
+    if os.geteuid() == 0:  # no uid of its own could be had: root without capabilities
+        layers["capabilities_dropped"] = isolation.drop_capabilities()
+        if not layers["capabilities_dropped"]:
+            raise PermissionError("could not drop the capabilities of a worker running as root")
+    if config.get("uid") is not None:
+        if os.getuid() != int(config["uid"]):
+            raise PermissionError(f"the worker does not run as uid {config['uid']}")
+        layers["uid"] = os.getuid()
+    return layers
+
+
 def main(argv=None):
     """Run the worker: the protocol on stdin/stdout, the student's prints to ``argv[0]``."""
     argv = sys.argv[1:] if argv is None else argv
+    uid = os.environ.pop(UID_VARIABLE, None)
+    if uid is not None:  # first of all: the uid of its own (the grader is root; the scratch folder is the uid's)
+        from .kernel import drop_privileges
+
+        if not drop_privileges(int(uid)):
+            return 1
     proto_in, proto_out = os.dup(0), os.dup(1)
     null = os.open(os.devnull, os.O_RDONLY)
     os.dup2(null, 0)
@@ -242,22 +300,25 @@ def main(argv=None):
     wires = sandbox.WIRES = sandbox.Tripwires(config.get("forbidden", {}))
     sys.meta_path.insert(0, wires)
     wires.wire()
-    sandbox.set_limits(config.get("memory_mb"), config.get("cpu_seconds"), config.get("file_mb"))
     scratch = config["scratch"]
+    layers = _build_walls(config, scratch)
     os.chdir(scratch)
     sys.path[:] = [p for p in sys.path if p not in ("", ".")]
-    import site
+    if config.get("audit_hook", True):
+        import site
 
-    allow = [os.path.dirname(os.path.dirname(os.path.abspath(__file__)))]  # the library itself
-    allow += [sys.prefix, sys.base_prefix, sys.exec_prefix] + list(site.getsitepackages())
-    allow += [os.path.dirname(os.__file__)]
-    # /proc of other processes would show the grader's memory and environment; its own is fine
-    allow += [f"/proc/{os.getpid()}", "/proc/meminfo", "/proc/cpuinfo"]
-    allow += [scratch]  # its own folder, even when a denied folder holds it
-    # the hook is a function built from copies of the rules: replacing Policy or its methods later changes nothing
-    sys.addaudithook(sandbox.Policy(scratch, list(config.get("deny", [])) + ["/proc"], allow, finder=wires).hook)
+        allow = [os.path.dirname(os.path.dirname(os.path.abspath(__file__)))]  # the library itself
+        allow += [sys.prefix, sys.base_prefix, sys.exec_prefix] + list(site.getsitepackages())
+        allow += [os.path.dirname(os.__file__)]
+        # /proc of other processes would show the grader's memory and environment; its own is fine
+        allow += [f"/proc/{os.getpid()}", "/proc/meminfo", "/proc/cpuinfo"]
+        allow += [scratch]  # its own folder, even when a denied folder holds it
+        # the hook is a function built from copies of the rules: replacing Policy or its methods later
+        # changes nothing
+        sys.addaudithook(sandbox.Policy(scratch, list(config.get("deny", [])) + ["/proc"], allow, finder=wires).hook)
+    layers["audit_hook"] = bool(config.get("audit_hook", True))
     del wires
-    write_frame(proto_out, {"ok": True, "pid": os.getpid()})
+    write_frame(proto_out, {"ok": True, "pid": os.getpid(), "layers": layers})
     server.serve()
     return 0
 
@@ -270,6 +331,9 @@ def run(argv):
     try:
         code = main(argv)
     except BaseException:
+        import traceback
+
+        traceback.print_exc()  # into the capture file (or /dev/null before it exists): for the instructor's log
         code = 1
     try:
         sys.stdout.flush()

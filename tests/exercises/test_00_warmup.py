@@ -59,10 +59,14 @@ def test_euler_step_oscillator(student):
 
 @pytest.mark.points(1)
 def test_euler_step_leaves_X_unchanged(student):
-    """euler_step returns a new array and does not modify X or call f more than once."""
+    """euler_step returns a new array holding the step, without modifying X or calling f more than once."""
     f = remote("harmonic_oscillator", omega=1.0)
     X = np.array([[[1.0], [0.0]], [[0.0], [1.0]]])
-    student.call("euler_step", f, X, 0.0, 0.1, check_inputs=True)
+    got = student.call("euler_step", f, X, 0.0, 0.1, check_inputs=True)
+    expect_array(got, euler(f, X, 0.0, 0.1), "euler_step(f, X of shape (2, 2, 1), t=0, h=0.1) on the oscillator "
+                 "with omega = 1", hints={"X itself: the step X + h f(X, t) is missing": X,
+                                          "zeros, not the new state X + h f(X, t)": np.zeros_like(X),
+                                          "h f(X, t) alone, without X": euler(f, X, 0.0, 0.1) - X})
     if student.calls_of(0) != 1:
         raise GradingFailure(f"euler_step evaluated f {student.calls_of(0)} times in one step; Euler's method "
                              "uses exactly one evaluation, f(X, t)")

@@ -286,7 +286,7 @@ def test_step_circle(student, method):
 @pytest.mark.parametrize("method", METHODS)
 def test_step_driven_particles(student, method):
     """One step on three particles in 2D driven in time: right values, X unchanged, right number of evaluations."""
-    f = remote("forced_oscillator", omega=2.0, amplitude=1.5, frequency=3.0)
+    f = remote("forced_oscillator", counted=True, omega=2.0, amplitude=1.5, frequency=3.0)  # the grader counts
     X = np.array([[[1.0, 0.0], [0.0, 1.0]], [[0.5, -0.5], [2.0, 0.0]], [[-1.0, 0.25], [0.0, -1.0]]])
     _check_step(student, method, f, X, 0.7, 0.1, "the driven oscillator with omega = 2, A = 1.5, Omega = 3",
                 check_inputs=True, count=True)

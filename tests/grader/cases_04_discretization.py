@@ -60,7 +60,8 @@ def particle_masses(nx, ny, width, height, rho):
                   "test_sag_converges_random_fabric": "cloth_sag gives"},
         "passes": _MASSES_TESTS + _EXPONENT_TESTS,
     },
-    # the naive constants of section 3 kept: the same mass and stiffnesses at every resolution
+    # the naive constants of section 3 kept: the same mass and stiffnesses at every resolution (at 8 x 8 a stable
+    # step 2% above the physical cloth's, which a check within 2% on either side let pass)
     "naive_constants": {
         "replace": {
             "particle_masses": '''
@@ -76,7 +77,8 @@ def particle_masses(nx, ny, width, height, rho):
                   "test_stiffness_random": "is off by",
                   "test_sag_converges": "off by +",
                   "test_sag_converges_random_fabric": "cloth_sag gives",
-                  "test_stable_step": "stable_step(nx=16",
+                  "test_stable_step": "stable_step(nx=8, ny=8, width=1, height=1, rho=0.2, Y={structural: 100, "
+                                      "shear: 25, flexion: 10}) returned 6.32 ms, 2% above 2 / omega_max",
                   "test_stable_step_shrinks_like_the_spacing": "stable_step"},
         "passes": _EXPONENT_TESTS,
     },
@@ -93,6 +95,22 @@ def fit_exponent(spacing, h_max):
                   "test_fit_exponent_library_steps": "the axes swapped"},
         "passes": _MASSES_TESTS + _STIFFNESS_TESTS + ["test_sag_converges", "test_sag_converges_random_fabric",
                                                       "test_stable_step", "test_stable_step_shrinks_like_the_spacing"],
+    },
+    # the stable step from the rough estimate omega_max ~ sqrt(k / m) of the stiffest spring and the lightest
+    # particle: 1.3% to 6% above 2 / omega_max, an unstable step (within 2% of it on fabrics with little shear)
+    "stable_step_from_the_stiffest_spring": {
+        "replace": {"stable_step": '''
+def stable_step(nx, ny, width, height, rho, Y):
+    """2 / omega_max, with omega_max = sqrt(k / m) of the stiffest spring and the lightest particle."""
+    m = particle_masses(nx, ny, width, height, rho)
+    k = spring_stiffness(nx, ny, width, height, Y)
+    k_max = max(float(np.max(values)) for values in k.values())
+    return 2.0 / np.sqrt(k_max / float(np.min(m)))
+'''},
+        "fails": {"test_stable_step": "3.1% above 2 / omega_max",
+                  "test_stable_step_shrinks_like_the_spacing": "a step at which symplectic Euler blows up on it"},
+        "passes": _MASSES_TESTS + _STIFFNESS_TESTS + _EXPONENT_TESTS + ["test_sag_converges",
+                                                                        "test_sag_converges_random_fabric"],
     },
     # a flexion spring given the rest length of one cell (L0 = dx instead of 2 dx): four times too stiff
     "flexion_rest_length_of_one_cell": {

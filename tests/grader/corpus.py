@@ -1,7 +1,8 @@
 """A corpus of submissions to exercise 00_warmup, each with what the grader must say about it.
 
 Each case starts from the master notebook and replaces the code cell that
-defines one or more functions (``replace``), or appends cells (``append``).
+defines one or more functions (``replace``), or appends cells (``append``) or
+puts cells before the first one (``prepend``).
 ``fails`` maps the tests that must fail to a piece of their one-line reason;
 ``passes`` lists tests that must still pass. Correct variants (``CORRECT``)
 must score full marks.
@@ -223,8 +224,9 @@ def euler_step(f, X, t, h):
         return np.array([[[1.025], [0.3]]])
     return X.copy()
 """},
-        "fails": {"test_euler_step_random": "is off by"},
-        "passes": EULER_PUBLIC + ["test_total_force_three_particles"],
+        # the third public test now checks the result too, not only that X was left unchanged
+        "fails": {"test_euler_step_random": "is off by", "test_euler_step_leaves_X_unchanged": "is off by"},
+        "passes": ["test_euler_step_circle", "test_euler_step_oscillator", "test_total_force_three_particles"],
     },
     "calls_the_library_stepper": {
         "replace": {"euler_step": """
@@ -332,16 +334,48 @@ def euler_step(f, X, t, h)
         "fails": {"test_euler_step_circle": "has a syntax error"},
         "passes": ["test_total_force_three_particles"],
     },
-    "defined_by_a_call": {
+    "defined_in_a_timeit_cell": {  # Jupyter runs a %%timeit cell in a namespace of its own: nothing stays defined
         "replace": {"euler_step": """
-def make_stepper():
-    def step(f, X, t, h):
-        return X + h * f(X, t)
-    return step
-
-euler_step = make_stepper()
+%%timeit -n 1 -r 1
+def euler_step(f, X, t, h):
+    return X + h * f(X, t)
 """},
-        "fails": {"test_euler_step_circle": "the grader did not run `euler_step = make_stepper()`"},
+        "fails": {"test_euler_step_circle": "`euler_step` is not defined: the grader skipped `%%timeit -n 1 -r 1` "
+                                            "(code cell 2, line 1) because it is a %%timeit cell",
+                  "test_run_circle": "`euler_step` is not defined: the grader skipped `%%timeit -n 1 -r 1`"},
+        "passes": ["test_total_force_three_particles"],
+    },
+    "defined_inside_a_try_block": {
+        "replace": {"run": """
+try:
+    def run(f, X0, t0, h, n_steps):
+        X0 = np.asarray(X0, dtype=float)
+        t = t0 + h * np.arange(n_steps + 1)
+        X = np.empty((n_steps + 1,) + X0.shape)
+        X[0] = X0
+        for k in range(n_steps):
+            X[k + 1] = euler_step(f, X[k], t[k], h)
+        return t, X
+except Exception as error:
+    print("run is broken:", error)
+"""},
+        "fails": {"test_run_circle": "`run` is not defined: the grader skipped `try:` (code cell 5, line 1) because it "
+                                     "is a top-level try statement; define it at the top level of a cell"},
+        "passes": EULER_PUBLIC,
+    },
+    "constant_set_in_an_if_block": {
+        "replace": {"total_force": """
+if "DRAG_SIGN" not in globals():
+    DRAG_SIGN = -1.0           # the drag opposes the velocity
+
+
+def total_force(x, v, m, g, d):
+    m = np.asarray(m, dtype=float)
+    return m[:, None] * np.asarray(g, dtype=float) + DRAG_SIGN * d * np.asarray(v, dtype=float)
+"""},
+        "fails": {"test_total_force_three_particles": "raised NameError at code cell 4, line 7, in total_force: "
+                                                      "`DRAG_SIGN` is not defined: the grader skipped `if "},
+        "passes": EULER_PUBLIC,
     },
     "endless_recursion": {
         "replace": {"euler_step": """
@@ -438,6 +472,144 @@ def euler_step(f, X, t, h):
 }
 
 CORRECT = {
+    # correct notebooks in the forms that a grader reading cells naively gets wrong (issue 10)
+    "time_and_capture_cell_magics": {
+        "replace": {
+            "euler_step": """
+%%time
+def euler_step(f, X, t, h):
+    return X + h * f(X, t)
+
+print(euler_step(lambda X, t: -X, np.ones(2), 0.0, 0.1))
+""",
+            "total_force": """
+%%capture forces_output
+def total_force(x, v, m, g, d):
+    m = np.asarray(m, dtype=float)
+    return m[:, None] * np.asarray(g, dtype=float) - d * np.asarray(v, dtype=float)
+
+print(total_force(np.zeros((1, 2)), np.ones((1, 2)), np.ones(1), np.array([0.0, -9.81]), 0.1))
+""",
+        },
+    },
+    "timeit_result_assigned_next_to_the_definition": {
+        "replace": {"total_force": """
+def total_force(x, v, m, g, d):
+    m = np.asarray(m, dtype=float)
+    return m[:, None] * np.asarray(g, dtype=float) - d * np.asarray(v, dtype=float)
+
+
+x3, v3, m3 = np.zeros((3, 2)), np.ones((3, 2)), np.ones(3)
+timing = %timeit -o -n 100 total_force(x3, v3, m3, np.array([0.0, -9.81]), 0.1)
+print(f"{timing.best * 1e6:.1f} microseconds per call")
+"""},
+    },
+    "lambda_stepper": {
+        "replace": {"euler_step": """
+euler_step = lambda f, X, t, h: X + h * f(X, t)   # one explicit Euler step
+"""},
+    },
+    "stepper_from_a_factory": {
+        "replace": {"euler_step": """
+def make_stepper():
+    def step(f, X, t, h):
+        return X + h * f(X, t)
+    return step
+
+euler_step = make_stepper()
+"""},
+    },
+    "eps_from_finfo_used_in_a_function": {
+        "replace": {"run": """
+EPS = np.finfo(float).eps          # machine epsilon
+
+
+def run(f, X0, t0, h, n_steps):
+    if abs(h) <= EPS:
+        raise ValueError(f"h must not be zero, got {h}")
+    X0 = np.asarray(X0, dtype=float)
+    t = t0 + h * np.arange(n_steps + 1)
+    X = np.empty((n_steps + 1,) + X0.shape)
+    X[0] = X0
+    for k in range(n_steps):
+        X[k + 1] = euler_step(f, X[k], t[k], h)
+    return t, X
+"""},
+    },
+    "dict_of_force_objects": {
+        "replace": {"total_force": """
+class Term:
+    def __init__(self, kind):
+        self.kind = kind
+
+    def __call__(self, v, m, g, d):
+        return m[:, None] * g if self.kind == "gravity" else -d * v
+
+
+TERMS = dict(gravity=Term("gravity"), drag=Term("drag"))
+
+
+def total_force(x, v, m, g, d):
+    m, g, v = np.asarray(m, dtype=float), np.asarray(g, dtype=float), np.asarray(v, dtype=float)
+    return TERMS["gravity"](v, m, g, d) + TERMS["drag"](v, m, g, d)
+"""},
+    },
+    "local_variables_named_like_forbidden_names": {  # the master's last cell imports euler, Gravity and Damping
+        "replace": {
+            "euler_step": """
+def euler_step(f, X, t, h):
+    euler = X + h * f(X, t)          # my Euler step, a local variable
+    return euler
+""",
+            "total_force": """
+def total_force(x, v, m, g, d):
+    Gravity = np.asarray(m, dtype=float)[:, None] * np.asarray(g, dtype=float)
+    Damping = -d * np.asarray(v, dtype=float)
+    return sum(term for term in (Gravity, Damping))
+""",
+        },
+    },
+    "own_integrate_shadows_the_library_import": {
+        "replace": {"run": """
+from particles import integrate    # the library's loop, to compare with mine below
+
+
+def integrate(f, X0, t0, h, n_steps):       # my own loop, under the same name
+    X0 = np.asarray(X0, dtype=float)
+    t = t0 + h * np.arange(n_steps + 1)
+    X = np.empty((n_steps + 1,) + X0.shape)
+    X[0] = X0
+    for k in range(n_steps):
+        X[k + 1] = euler_step(f, X[k], t[k], h)
+    return t, X
+
+
+def run(f, X0, t0, h, n_steps):
+    return integrate(f, X0, t0, h, n_steps)
+"""},
+    },
+    "draft_redefined_further_down": {
+        "replace": {"euler_step": """
+from particles.integrators import euler
+
+
+def euler_step(f, X, t, h):
+    return euler(f, X, t, h)        # a first draft with the library's step; mine is at the end
+"""},
+        "append": ["def euler_step(f, X, t, h):\n    return X + h * f(X, t)"],
+    },
+    "pip_install_and_other_line_magics": {
+        "prepend": ["""!pip install numpy
+%pip install -q matplotlib
+%matplotlib inline
+%load_ext autoreload
+%autoreload 2
+files = !ls
+try:
+    import particles
+except ImportError:
+    !pip install particles"""],
+    },
     "per_coordinate_loops_and_lists": {
         "replace": {
             "euler_step": """
@@ -522,8 +694,12 @@ def total_force(x, v, m, g, d):
 
 
 def build(case):
-    """The notebook (a dict) of corpus case `case` (a dict with replace/append)."""
-    return exercise_corpus.build("00_warmup", case)
+    """The notebook (a dict) of corpus case `case` (a dict with replace/append/prepend)."""
+    notebook = exercise_corpus.build("00_warmup", case)
+    for k, code in enumerate(case.get("prepend", [])):
+        notebook["cells"].insert(k, {"cell_type": "code", "metadata": {}, "source": code, "outputs": [],
+                                     "execution_count": None, "id": f"prepended-{k}"})
+    return notebook
 
 
 def write_corpus(folder):
