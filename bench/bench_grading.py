@@ -10,9 +10,11 @@ grader's corpus (correct variants, the master, the stub and quick-failing
 wrong answers; no timeouts, which would measure sleeping rather than
 grading).
 
-The machine is shared: the script interleaves the two settings, keeps the
-best of each, and prints the CPU time of the graders so that a low speed-up
-caused by load elsewhere can be told from one caused by the grader.
+The machine is shared: the script interleaves the settings, keeps the best
+of each, and prints the CPU time of the graders so that a low speed-up caused
+by load elsewhere can be told from one caused by the grader. The first run of
+a machine also fills the grader's private bytecode cache (the sessions'
+``PYTHONPYCACHEPREFIX``): use ``--repeat 2`` or more.
 
 The third setting grades with the Python-level walls alone (no namespaces, no
 uid of its own, no Landlock: the grader as it was before the operating
@@ -66,6 +68,7 @@ def main():
         settings = {"OS walls, --jobs 1": (1, walls), "OS walls, --jobs 2": (2, walls),
                     "Python walls only, --jobs 1": (1, baseline)}
         wall, cpu = {name: [] for name in settings}, {name: [] for name in settings}
+        layers = {}
         load = os.getloadavg()[0]
         for run in range(args.repeat):  # interleaved, so that a burst of load elsewhere hits every setting
             for name, (jobs, plan) in settings.items():
@@ -77,9 +80,12 @@ def main():
                 after = resource.getrusage(resource.RUSAGE_CHILDREN)
                 cpu[name].append(after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
                 assert len(summary["students"]) == args.n
+                layers.setdefault(name, summary_layers(summary))
         print(f"{args.n} submissions of 00_warmup, best of {args.repeat} runs; load average before: {load:.2f}, "
               f"after: {os.getloadavg()[0]:.2f}")
-        print(f"OS walls: {isolation.describe(summary_layers(summary))}")
+        print(f"OS walls: {isolation.describe(layers['OS walls, --jobs 1'])}")
+        print("(CPU s counts the pytest sessions and the workers they waited for; a worker inside"
+              " bubblewrap is reaped in its PID namespace, so its CPU time is not in the count)")
         print(f"{'setting':<30}{'wall s':>10}{'per submission':>16}{'CPU s':>10}")
         for name in settings:
             best = min(wall[name])

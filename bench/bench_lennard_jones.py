@@ -1,20 +1,24 @@
-"""Lennard-Jones forces: bucket grid ("cells") vs all pairs, at liquid density.
+"""Lennard-Jones forces: bucket grid ("cells") vs all pairs, in a periodic liquid.
 
-A 3D Lennard-Jones liquid at reduced density rho sigma^3 = 0.8 with cutoff
-2.5 sigma, for N = 1k, 4k, 16k, 64k particles. For each N:
+A 3D Lennard-Jones liquid in a periodic box at reduced density rho sigma^3 =
+0.86 (an FCC lattice melted at T* = 3, then cooled to T* = 0.85), cutoff 2.5
+sigma, for N = 1k, 4k, 16k, 64k particles; the box is 4 x (10, 5, 5), (10, 10,
+10), (20, 20, 10) and (20, 20, 40) FCC cells, so the number of pairs grows
+exactly like N. For each N:
 
-* all      one force evaluation testing all N^2 pairs (the O(N^2) reference);
+* all      one force evaluation testing all N^2 pairs (minimum image; the O(N^2) reference);
 * search   the bucket-grid pair search alone;
-* kdtree   scipy.spatial.cKDTree pair search, a compiled reference point;
+* kdtree   scipy.spatial.cKDTree pair search in the same periodic box, a compiled reference point;
 * fresh    bucket-grid search plus force pass (no reuse), one evaluation;
 * pass     the force pass alone over a ready pair list;
-* step     amortized cost per force evaluation during a short velocity-Verlet
-           run with a Verlet list (skin 0.3 sigma), rebuilt only when needed.
+* step     cost per step of a velocity-Verlet run with a Verlet list (skin 0.3 sigma,
+           rebuilt only when needed), the force evaluated once per step (evals/step).
 
 Run:  python bench/bench_lennard_jones.py [--quick]
 """
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -26,16 +30,40 @@ from _timing import best_time  # noqa: E402
 
 from particles import ParticleSystem  # noqa: E402
 from particles.forces import LennardJones  # noqa: E402
+from particles.liquids import fcc_lattice, maxwell_boltzmann  # noqa: E402
 from particles.neighbors import cell_pairs  # noqa: E402
+from particles.periodic import wrap  # noqa: E402
+from particles.thermostats import Berendsen  # noqa: E402
+
+CELLS = {1000: (10, 5, 5), 4000: (10, 10, 10), 16000: (20, 20, 10), 64000: (20, 20, 40)}
 
 
-def liquid(n, density=0.8, seed=0):
-    """Jittered cubic lattice at the given number density (sigma = 1)."""
-    rng = np.random.default_rng(seed)
-    k = int(np.ceil(n ** (1 / 3)))
-    side = (n / density) ** (1 / 3)
-    grid = np.stack(np.meshgrid(*[np.arange(k)] * 3, indexing="ij"), -1).reshape(-1, 3)[:n]
-    return (grid + 0.5 + rng.uniform(-0.1, 0.1, (n, 3))) * side / k
+def liquid(n, density=0.86, seed=0):
+    """A periodic Lennard-Jones liquid of n particles: an FCC lattice melted at T* = 3, then held at 0.85.
+
+    0.4 time units at T* = 3 melt the lattice, 0.2 more at T* = 0.85 (velocities
+    rescaled every step) cool it. Returns positions (n, 3) folded into the
+    box, velocities (n, 3) and the box (3,).
+    """
+    x, box = fcc_lattice(CELLS[n], density)
+    melt = ParticleSystem(x, v=maxwell_boltzmann(n, 3.0, seed=seed),
+                          forces=[LennardJones.from_epsilon_sigma(skin=0.3, box=box)])
+    melt.run(0.4, 0.005, method=Berendsen(3.0, tau=0.005))
+    melt.run(0.6, 0.005, method=Berendsen(0.85, tau=0.005))
+    return wrap(melt.X[:, 0], box), melt.state()[:, 1], box
+
+
+class Counter:
+    """A force that adds nothing and counts its evaluations (position-only, like Lennard-Jones)."""
+
+    uses_velocity = False
+    uses_time = False
+
+    def __init__(self):
+        self.calls = 0
+
+    def add_to(self, F, x, v, t, m):
+        self.calls += 1
 
 
 def main(argv=None):
@@ -45,50 +73,55 @@ def main(argv=None):
     sizes = [1000, 4000] if args.quick else [1000, 4000, 16000, 64000]
     all_limit = 16000  # all pairs at 64k would take minutes
 
+    load = os.getloadavg()[0]
     print(__doc__.split("\n\n")[1].replace("\n", " "))
-    header = f"{'N':>6} {'pairs':>9} {'all':>9} {'search':>8} {'kdtree':>8} {'fresh':>8} {'pass':>8} {'step':>8} {'all/fresh':>9} {'rebuilds':>9}"
-    print("\ntimes in ms per force evaluation (best of several runs)")
+    header = (f"{'N':>6} {'pairs':>9} {'all':>9} {'search':>8} {'kdtree':>8} {'fresh':>8} {'pass':>8} "
+              f"{'step':>8} {'all/fresh':>9} {'evals/step':>10} {'rebuilds':>9}")
+    print("\ntimes in ms (best of several runs)")
     print(header)
     print("-" * len(header))
     results = {}
     for n in sizes:
-        x = liquid(n)
-        lj_all = LennardJones.from_epsilon_sigma(neighbors="all")
-        lj_fresh = LennardJones.from_epsilon_sigma(skin=0.0)
+        x, v, box = liquid(n)
+        lj_all = LennardJones.from_epsilon_sigma(neighbors="all", box=box)
+        lj_fresh = LennardJones.from_epsilon_sigma(skin=0.0, box=box)
         F_ref = lj_fresh(x)
         t_all = None
         if n <= all_limit:
             t_all = best_time(lambda: lj_all(x), repeat=1)
             assert np.allclose(lj_all(x), F_ref, atol=1e-9)
-        t_search = best_time(lambda: cell_pairs(x, 2.5))
-        t_kd = best_time(lambda: cKDTree(x).query_pairs(2.5, output_type="ndarray"))
+        t_search = best_time(lambda: cell_pairs(x, 2.5, box=box))
+        t_kd = best_time(lambda: cKDTree(x, boxsize=box).query_pairs(2.5, output_type="ndarray"))
+
         def fresh():
             lj_fresh.neighbor_list.reset()  # forget the pair list: search again
             return lj_fresh(x)
 
         t_fresh = best_time(fresh)
-        lj_reuse = LennardJones.from_epsilon_sigma(skin=0.3)
+        lj_reuse = LennardJones.from_epsilon_sigma(skin=0.3, box=box)
         lj_reuse(x)  # build the list once
-        t_pass = best_time(lambda: lj_reuse(x))
-        # a short run: velocity Verlet, h = 0.005, velocities at temperature ~1
-        rng = np.random.default_rng(1)
-        v = rng.normal(size=x.shape)
-        v -= v.mean(axis=0)
-        lj_run = LennardJones.from_epsilon_sigma(skin=0.3)
-        ps = ParticleSystem(x, v=v, forces=[lj_run])
+        t_pass = best_time(lambda: lj_reuse(x), repeat=5)
+        # a short run: velocity Verlet, h = 0.005, velocities at T* = 0.85
+        lj_run, count = LennardJones.from_epsilon_sigma(skin=0.3, box=box), Counter()
+        ps = ParticleSystem(x, v=v, forces=[lj_run, count])
         steps = 40
-        t_run = best_time(lambda: ps.run(ps.t + steps * 0.005, 0.005, method="verlet", every=steps), repeat=1)
-        t_step = t_run / (2 * steps)  # two force evaluations per Verlet step
-        i, _ = cell_pairs(x, 2.5)
-        results[n] = t_fresh
+        t_run = best_time(lambda: ps.run(ps.t + steps * 0.005, 0.005, method="verlet", every=steps), repeat=2)
+        runs = count.calls / (steps + 1)  # best_time may run it more than once
+        t_step = t_run / steps
+        pairs = len(cell_pairs(x, 2.5, box=box)[0])
+        results[n] = pairs, t_fresh, t_pass, t_step
         ratio = f"{t_all / t_fresh:9.1f}" if t_all else f"{'-':>9}"
         all_ms = f"{1e3 * t_all:9.1f}" if t_all else f"{'(skip)':>9}"
-        print(f"{n:>6} {len(i):>9} {all_ms} {1e3 * t_search:8.1f} {1e3 * t_kd:8.1f} {1e3 * t_fresh:8.1f} "
-              f"{1e3 * t_pass:8.1f} {1e3 * t_step:8.1f} {ratio} {lj_run.neighbor_list.builds:>5}/{2 * steps}")
+        print(f"{n:>6} {pairs:>9} {all_ms} {1e3 * t_search:8.1f} {1e3 * t_kd:8.1f} {1e3 * t_fresh:8.1f} "
+              f"{1e3 * t_pass:8.1f} {1e3 * t_step:8.1f} {ratio} {count.calls / (runs * steps):>10.3f} "
+              f"{lj_run.neighbor_list.builds:>5}/{int(runs) * steps}")
     print()
     ns = sorted(results)
     for a, b in zip(ns, ns[1:]):
-        print(f"cells cost growth {a:>6} -> {b:>6} particles (x{b / a:.0f}): x{results[b] / results[a]:.2f}")
+        (pa, fa, qa, sa), (pb, fb, qb, sb) = results[a], results[b]
+        print(f"cost growth {a:>6} -> {b:>6} particles (x{b / a:.0f}, pairs x{pb / pa:.2f}): "
+              f"search plus forces x{fb / fa:.2f}, force pass x{qb / qa:.2f}, Verlet step x{sb / sa:.2f}")
+    print(f"load average before: {load:.2f}, after: {os.getloadavg()[0]:.2f}")
 
 
 if __name__ == "__main__":

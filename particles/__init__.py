@@ -8,7 +8,9 @@ effects with lifetimes (:mod:`particles.emitters`, :mod:`particles.effects`),
 flocks (:mod:`particles.flocking`), mass-spring models with Provot's
 constraint, implicit solvers and cloth self-collision
 (:mod:`particles.massspring`, :mod:`particles.constraints`,
-:mod:`particles.implicit`, :mod:`particles.selfcollision`) and drawing
+:mod:`particles.implicit`, :mod:`particles.selfcollision`), molecular dynamics
+in a periodic box (:mod:`particles.periodic`, :mod:`particles.thermostats`,
+:mod:`particles.liquids`, :mod:`particles.statistics`) and drawing
 (:mod:`particles.render`, imported on demand because it loads Matplotlib's
 pyplot).
 
@@ -18,8 +20,8 @@ pyplot).
 >>> t, X = ps.run(0.5, h=0.01, method="verlet")
 """
 
-from . import (collisions, constraints, effects, emitters, flocking, forces, implicit, integrators, massspring,
-               neighbors, selfcollision, springs, surfaces)
+from . import (collisions, constraints, effects, emitters, flocking, forces, implicit, integrators, liquids,
+               massspring, neighbors, periodic, selfcollision, springs, statistics, surfaces, thermostats)
 from .collisions import Collider
 from .effects import ParticleEffect
 from .errors import ConvergenceError, SimulationDiverged
@@ -60,4 +62,8 @@ __all__ = [
     "effects",
     "flocking",
     "selfcollision",
+    "periodic",
+    "thermostats",
+    "statistics",
+    "liquids",
 ]

@@ -117,7 +117,7 @@ def _grade(args):
             total = sum(s for s, _ in by.values()), sum(m for _, m in by.values())
             print(f"{student:<24}{cells}{f'{total[0]:g}/{total[1]:g}':>12}")
     if args.out:
-        print(f"\ngradebook: {Path(args.out) / 'gradebook.csv'}; per student: results.json and feedback.md")
+        print(f"\ngradebook: {Path(args.out) / 'gradebook.csv'}; per student: results.json, feedback.md and feedback.html")
     if not summary["students"] and not args.gradescope:
         print("particles grade: no notebooks were graded", file=sys.stderr)
         return 1
@@ -133,6 +133,22 @@ def _gradescope_bundle(args):
         print(f"particles gradescope-bundle: {error}", file=sys.stderr)
         return 2
     print(f"wrote {args.out}: {len(names)} files (setup.sh, run_autograder, the library and the exercise tests)")
+    return 0
+
+
+def _new_exercise(args):
+    from .course.template import new_exercise
+
+    try:
+        root = _root(args)
+        written = new_exercise(root, args.name)
+    except (ValueError, FileExistsError) as error:  # a malformed name, a taken number, files that exist
+        print(f"particles new-exercise: {error}", file=sys.stderr)
+        return 2
+    for path in written:
+        print(f"wrote {path.relative_to(root)}")
+    print(f"next: edit both, run `particles release`, then `pytest {written[1].relative_to(root)}` "
+          "(the master must score full marks)")
     return 0
 
 
@@ -217,6 +233,14 @@ def build_parser():
     grade.add_argument("--resume", action="store_true",
                        help="keep the records in OUT/records of unchanged notebooks and grade only the rest")
     grade.set_defaults(run=_grade)
+
+    new = sub.add_parser("new-exercise", help="write a template master and test module for a new exercise NN_topic",
+                         description="Write solutions/NN_topic.ipynb and tests/exercises/test_NN_topic.py from a "
+                         "template that passes (the master scores full marks, its released stub zero). Refuses "
+                         "a malformed name, a number already taken, or files that exist (exit status 2).")
+    new.add_argument("name", metavar="NN_topic", help="two digits, an underscore and a lower-case topic")
+    new.add_argument("--root", help="the course folder (default: found from the current directory)")
+    new.set_defaults(run=_new_exercise)
 
     bundle = sub.add_parser("gradescope-bundle", help="write the Gradescope autograder zip")
     bundle.add_argument("--out", default="autograder.zip", help="the zip to write (default autograder.zip)")

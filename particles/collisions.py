@@ -60,6 +60,8 @@ __all__ = [
 METHODS = ("project", "backtrack")
 UNIT_TOL = 1e-9
 """Largest accepted ``| |n| - 1 |`` for the unit normals given to :func:`respond`."""
+ROUNDOFF_DEPTH = 1e-12
+"""Depth (m) below which a particle that gets no impulse counts as on the surface, not in contact."""
 
 
 def respond(v, n, restitution=1.0, friction=0.0):
@@ -128,7 +130,10 @@ def _respond(v, n, eps, mu):
 class Contacts:
     """The collisions found during one call, one row per contact.
 
-    A particle that bounces twice within a step appears twice.
+    A particle that bounces twice within a step appears twice. Only
+    responses with an impulse are contacts: a particle left on the surface
+    by round-off that leaves it, or rests on it without impulse, is not
+    logged (``len(contacts)`` counts bounces).
 
     Attributes
     ----------
@@ -301,9 +306,16 @@ class Collider:
         return self._project(x, v, m, self._free(len(x), pinned), float(t))
 
     def _project(self, x, v, m, free, t):
-        """Project the free particles inside the solid, in place; returns x, v and the contacts."""
+        """Project the free particles inside the solid, in place; returns x, v and the contacts.
+
+        A particle that is inside only by round-off (``H >= -ROUNDOFF_DEPTH``,
+        e.g. on a contact point computed in the step) and is not approaching
+        is moved onto the surface but not logged: no impulse, no contact.
+        """
         idx = np.flatnonzero(free)
-        idx = idx[self.surface._H(x[idx]) < 0]
+        H = self.surface._H(x[idx])
+        inside = H < 0
+        idx, H = idx[inside], H[inside]
         if not len(idx):
             return x, v, Contacts.empty(x.shape[1])
         p = self.surface._closest(x[idx])
@@ -311,7 +323,8 @@ class Collider:
         v_new, dv_n, dv_t = _respond(v[idx], n, self.restitution, self.friction)
         x[idx], v[idx] = p, v_new
         mi = m[idx, None]
-        return x, v, Contacts(idx, np.full(len(idx), t), p, n, mi * dv_n, mi * dv_t)
+        log = _changed(dv_n, dv_t) | (H < -ROUNDOFF_DEPTH)
+        return x, v, Contacts(idx[log], np.full(log.sum(), t), p[log], n[log], (mi * dv_n)[log], (mi * dv_t)[log])
 
     def collide(self, X_old, X_new, t, h, m=1.0, pinned=()):
         """Fix the collisions of one step from `t` to `t + h`.
@@ -385,13 +398,19 @@ class Collider:
                                                  rest[resting], self.friction)
             tc = t0[hit] + s * dt[hit]
             mi = m[idx[hit], None]
-            found.append(Contacts(idx[hit], tc, xc, n, mi * dv_n, mi * dv_t))
+            # a crossing whose response changes nothing (a path that starts on the surface by round-off,
+            # leaving it) is no contact: not logged, its path left as it is, not tested again
+            real = _changed(dv_n, dv_t)
+            found.append(Contacts(idx[hit][real], tc[real], xc[real], n[real], (mi * dv_n)[real],
+                                  (mi * dv_t)[real]))
+            keep = real | resting  # a resting particle without impulse still has its pull cancelled
+            hit, xc, v_new, ah, rest, tc = hit[keep], xc[keep], v_new[keep], ah[keep], rest[keep], tc[keep]
             # the rest of the step: constant acceleration from the contact state
             x0[hit], v0[hit] = xc, v_new
             x1[hit] = xc + v_new * rest[:, None] + 0.5 * ah * rest[:, None] ** 2
             v1[hit] = v_new + ah * rest[:, None]
             t0[hit], dt[hit] = tc, np.maximum(rest, 1e-300)
-            todo = hit
+            todo = hit[real[keep]]
         X[idx, 0], X[idx, 1] = x1, v1
         x, v, projected = self._project(X[:, 0], X[:, 1], m, free, t + h)
         X[:, 0], X[:, 1] = x, v
@@ -495,6 +514,11 @@ class Collider:
                 t_out.append(times[k])
                 X_out.append(system.state())
         return np.array(t_out), np.stack(X_out), Contacts.concatenate(found, system.d)
+
+
+def _changed(dv_n, dv_t):
+    """Rows of a response that change the velocity: a non-zero normal or friction impulse."""
+    return np.any(dv_n != 0, axis=1) | np.any(dv_t != 0, axis=1)
 
 
 def _resting_friction(v, a_t, n, pressure, tau, mu):

@@ -27,6 +27,13 @@ rand * spread`` with ``rand`` uniform in [-1, 1].
 trails behind moving particles, bursts when they die, or Reeves' hierarchical
 systems, where every particle of a parent system is itself a particle system.
 
+Emitters live in open space: a shape places particles where it is, even
+outside a periodic box (:mod:`particles.periodic`). That is harmless for the
+forces, which take the minimum image of every pair wherever the particles
+are; fold the positions with :func:`particles.periodic.wrap` to draw them.
+A newly added particle resets the neighbour lists of the system's forces
+(:meth:`particles.ParticleSystem.add_particles`).
+
 References
 ----------
 .. [1] W. T. Reeves, "Particle Systems - a Technique for Modeling a Class of

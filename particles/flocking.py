@@ -36,6 +36,7 @@ from .errors import SimulationDiverged
 from .forces import Force, pair_differences
 from .integrators import step_times
 from .neighbors import cell_pairs
+from .periodic import box_option, minimum_image
 from .system import ParticleSystem
 
 __all__ = ["Boids", "Containment", "Flock", "polarization", "spread"]
@@ -84,6 +85,11 @@ class Boids(Force):
         all around, the default). Neighbours behind it are not seen.
     max_force : float
         Largest steering acceleration, in m/s^2 (default: unlimited).
+    box : array_like, shape (d,) or float, optional
+        Side lengths of a periodic world, in metres, each at least
+        ``2 radius`` (see :mod:`particles.periodic`): boids see each other
+        through the walls, by the minimum image. Wrap the positions for
+        drawing with :func:`particles.periodic.wrap`. Default: open space.
 
     Notes
     -----
@@ -93,7 +99,7 @@ class Boids(Force):
     """
 
     def __init__(self, radius, separation=1.0, alignment=1.0, cohesion=1.0, separation_radius=None,
-                 view_angle=np.pi, max_force=np.inf):
+                 view_angle=np.pi, max_force=np.inf, box=None):
         self.radius = positive_number(radius, "radius", "metres")
         self.separation = nonnegative_number(separation, "separation")
         self.alignment = nonnegative_number(alignment, "alignment")
@@ -104,12 +110,15 @@ class Boids(Force):
         if self.view_angle > np.pi:
             raise ValueError(f"view_angle must lie in [0, pi] radians, got {view_angle!r}")
         self.max_force = float(max_force) if max_force == np.inf else positive_number(max_force, "max_force", "m/s^2")
+        self.box = box_option(box, self.radius, reach="radius")
 
     def neighbours(self, x, v):
         """Directed pairs ``(i, j)``: boid ``i`` sees boid ``j``; and ``x_j - x_i`` as shape (d, p)."""
-        i, j = cell_pairs(x, self.radius)
+        i, j = cell_pairs(x, self.radius, box=self.box)
         obs, nb = np.concatenate([i, j]), np.concatenate([j, i])
         r = pair_differences(x, nb, obs)  # (d, p): x_j - x_i
+        if self.box is not None:
+            r = minimum_image(r, self.box, axis=0)
         if self.view_angle < np.pi:
             vt = np.ascontiguousarray(v.T)
             dot = np.zeros(len(obs))

@@ -13,7 +13,8 @@ evaluates them all at once; it also assembles the sparse force Jacobians
 ``dF/dx`` and ``dF/dv`` that implicit integration needs.
 
 :class:`Bending` resists the angle between consecutive segments of a chain,
-with a torque proportional to that angle (hair).
+with a torque proportional to that angle (hair); :class:`Clamp` resists the
+angle between a chain's first segment and a fixed direction (a clamped root).
 
 References
 ----------
@@ -29,7 +30,7 @@ import scipy.sparse
 from ._checks import as_float_array
 from .forces import Force, pair_differences, scatter_pair_forces
 
-__all__ = ["Springs", "Bending", "spring_jacobian_blocks"]
+__all__ = ["Springs", "Bending", "Clamp", "spring_jacobian_blocks"]
 
 
 def _indices(value, name, width):
@@ -327,3 +328,83 @@ class Bending(Force):
     def potential_energy(self, x, m=None, t=0.0):
         """``sum kb (theta - theta0)^2 / 2``, in joules."""
         return 0.5 * float(np.sum(self.kb * (self.angles(x) - self.rest_angle) ** 2))
+
+
+class Clamp(Force):
+    """A clamped end: a torque proportional to the angle between a segment and a fixed direction.
+
+    For each pair ``(i, j)`` (``i`` the clamped end, usually pinned, ``j`` its
+    neighbour), ``theta`` is the angle between the unit vector ``u0`` and
+    ``e = x_j - x_i``. The energy ``kb theta^2 / 2`` gives the force
+    ``F_j = -F_i = kb (theta / sin theta) (u0 - cos(theta) e_hat) / |e|``:
+    the joint of :class:`Bending` whose first segment is held along ``u0``.
+
+    Parameters
+    ----------
+    pairs : array_like of int, shape (c, 2)
+        ``(i, j)`` per clamp.
+    direction : array_like, shape (d,) or (c, d)
+        The clamped direction(s) ``u0``, normalized here.
+    kb : float or array_like, shape (c,)
+        Stiffness, in N m / rad (joules), >= 0.
+
+    Notes
+    -----
+    A beam clamped at ``x_0`` has ``w(0) = 0`` and ``w'(0) = 0``. Pinning
+    ``x_0`` and ``x_1`` instead holds the whole first segment straight: the
+    beam is then clamped half a segment in, an error of first order in the
+    spacing. The mirror-image ghost node ``x_-1`` (reflection of ``x_1``)
+    makes the root a joint of angle ``2 theta`` that stands for half a
+    segment, i.e. a :class:`Bending` joint of stiffness ``kb`` turned by
+    ``2 theta`` with half the weight: energy ``(kb / 2) (2 theta)^2 / 2``, a
+    clamp of stiffness ``2 kb`` (see :func:`particles.massspring.hair`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> clamp = Clamp([[0, 1]], direction=[1.0, 0.0], kb=2.0)
+    >>> x = np.array([[0.0, 0.0], [0.1, 0.0]])
+    >>> clamp(x).tolist()   # straight along u0: no force
+    [[0.0, 0.0], [0.0, 0.0]]
+    """
+
+    uses_velocity = False
+
+    def __init__(self, pairs, direction, kb=1.0):
+        ij = _indices(pairs, "pairs", 2)
+        self.i, self.j = ij[:, 0].copy(), ij[:, 1].copy()
+        c = len(ij)
+        self._highest = int(ij.max()) if c else -1
+        u = as_float_array(direction, "direction", ndim=(1, 2))
+        u = np.broadcast_to(u, (c, u.shape[-1])).copy() if u.ndim == 1 else u
+        if u.shape[0] != c:
+            raise ValueError(f"direction must have shape (d,) or ({c}, d), got shape {u.shape}")
+        norm = np.linalg.norm(u, axis=1)
+        if np.any(norm == 0):
+            raise ValueError("direction must be non-zero vectors")
+        self.direction = u / norm[:, None]
+        self.kb = _per_item(kb, "kb", c)
+
+    def angles(self, x):
+        """Angle between each clamped segment and its direction, in radians, shape (c,)."""
+        e = pair_differences(np.asarray(x, dtype=float), self.j, self.i)
+        L, u = _unit(e)
+        return np.arccos(np.clip(np.einsum("as,sa->s", u, self.direction), -1.0, 1.0))
+
+    def add_to(self, F, x, v, t, m):
+        _check_fit(self._highest, len(x), "pairs")
+        e = pair_differences(x, self.j, self.i)  # (d, c)
+        L, u = _unit(e)
+        u0 = self.direction.T
+        c = np.clip(np.einsum("as,as->s", u, u0), -1.0, 1.0)
+        theta = np.arccos(c)
+        s = np.sqrt(np.maximum(1.0 - c * c, 0.0))
+        ratio = np.where(s > 1e-8, theta / np.maximum(s, 1e-8), 1.0)  # theta / sin(theta), 1 at theta = 0
+        g = (u0 - c * u) * np.divide(self.kb * ratio, L, out=np.zeros_like(L), where=L > 0)  # force on j
+        n = len(F)
+        for a in range(F.shape[1]):  # a loop over the d coordinates
+            F[:, a] += np.bincount(self.j, g[a], minlength=n) - np.bincount(self.i, g[a], minlength=n)
+
+    def potential_energy(self, x, m=None, t=0.0):
+        """``sum kb theta^2 / 2``, in joules."""
+        return 0.5 * float(np.sum(self.kb * self.angles(x) ** 2))

@@ -195,6 +195,29 @@ def test_elastic_bounce_keeps_its_height_with_backtracking(stepper):
     np.testing.assert_allclose(contacts.time[0], np.sqrt(2 / g), rtol=1e-9)  # the exact impact time
 
 
+@pytest.mark.parametrize("stepper", ["verlet", "rk4"])
+def test_contacts_count_bounces_without_round_off_contacts(stepper):
+    """Issue 13: an elastic ball logs one contact per bounce, every one with an impulse (none after round-off)."""
+    heights, contacts = drop_ball("backtrack", 1.0, 20, stepper=stepper)
+    assert len(contacts) == 20 and len(np.unique(contacts.time)) == 20
+    assert np.all(contacts.impulse[:, 1] > 0)
+
+
+def test_resting_and_leaving_particles_are_not_logged():
+    """A dead-stopped ball logs its one impact; a particle inside by round-off and leaving logs nothing."""
+    _, contacts = drop_ball("backtrack", 0.0, 3)
+    assert len(contacts) == 1 and contacts.impulse[0, 1] > 0
+    floor = Plane([0.0, 0.0], [0.0, 1.0])
+    X_old = np.array([[[0.0, -1e-18], [0.0, 1.0]]])  # on the floor by round-off, moving up
+    X_new = np.array([[[0.0, -1e-18], [0.0, 1.0]]])
+    for method in ("backtrack", "project"):
+        X, contacts = Collider(floor, method=method).collide(X_old, X_new, 0.0, 0.01)
+        assert len(contacts) == 0 and X[0, 0, 1] >= 0.0
+    X_deep = np.array([[[0.0, -0.1], [0.0, 1.0]]])  # a real penetration is still reported, even when leaving
+    X, contacts = Collider(floor, method="project").collide(X_deep, X_deep, 0.0, 0.01)
+    assert len(contacts) == 1 and X[0, 0, 1] == 0.0
+
+
 @pytest.mark.parametrize("eps", [0.8, 0.5])
 def test_heights_shrink_by_restitution_squared(eps):
     """With eps < 1 each bounce reaches eps^2 of the previous height (within 1%)."""

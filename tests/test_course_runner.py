@@ -12,6 +12,7 @@ import pytest
 
 from particles.course.code import SubmissionCode
 from particles.course.grading import grade
+from particles.course.registry import remote
 from particles.course.release import release
 from particles.course.runner import GradingFailure, Submission
 
@@ -42,6 +43,18 @@ def state():
     global counter
     counter = counter + 1 if "counter" in globals() else 1
     return counter
+
+def three_evaluations_claiming_one(f, X, t):
+    # evaluates f three times and tries every way to make the count say one
+    for _ in range(3):
+        f(X, t)
+    for attempt in (lambda: setattr(f, "calls", 1), lambda: object.__setattr__(f, "calls", 1),
+                    lambda: setattr(type(f), "calls", 1)):
+        try:
+            attempt()
+        except Exception:
+            pass
+    return f(X, t) * 0 + len(str(f))
 """
 
 
@@ -63,7 +76,7 @@ def test_per_call_time_limit(submission):
     ("spawn", "start other programs"),
     ("connect", "use the network"),
     ("kill_parent", "send signals to processes"),
-    ("big_file", "File too large"),
+    ("big_file", "larger than 16 MiB"),
 ])
 def test_refused_operations(submission, name, reason):
     """Starting programs, networking, signalling the grader and huge files are refused with a reason."""
@@ -312,3 +325,12 @@ def test_bad_limits_are_rejected(tmp_path, limits, name):
         with pytest.raises(ValueError, match=f"{name} must be a finite number > 0"):
             grade([ROOT / "solutions" / "00_warmup.ipynb"], tmp_path / "out", root=ROOT, **limits)
         assert not (tmp_path / "out").exists()
+
+
+def test_counted_functions_are_counted_by_the_grader(submission):
+    """A counted registry function is evaluated in the grader, which counts every call; the worker cannot lie."""
+    X = np.array([1.0, 0.0])
+    value = submission.call("three_evaluations_claiming_one", remote("circle", counted=True), X, 0.0)
+    assert submission.calls_of(0) == 4 and value.shape == (2,)
+    submission.call("three_evaluations_claiming_one", remote("circle"), X, 0.0)  # counted in the worker
+    assert submission.calls_of(0) == 2  # the worker's own count: rewritten to 1, then one more call

@@ -183,3 +183,23 @@ def test_diverged_counts_the_steps():
         flock.run(5.0, 0.1)
     assert info.value.step == 14 and info.value.t == pytest.approx(1.3)
     assert np.all(np.isfinite(flock.system.X)) and flock.t == pytest.approx(1.3)
+
+
+@pytest.mark.parametrize("view_angle", [np.pi, 2.0])
+def test_boids_in_a_periodic_world_see_through_the_walls(view_angle):
+    """With box=L the rules equal the brute force on minimum-image differences, for unwrapped positions."""
+    from particles.periodic import minimum_image
+
+    L = 10.0
+    x, v = random_flock(60, box=L, seed=4)
+    rules = Boids(radius=2.0, separation=0.5, alignment=1.0, cohesion=0.3, view_angle=view_angle, box=L)
+    moved = x + np.random.default_rng(5).integers(-2, 3, size=x.shape) * L  # whole boxes away
+    a = rules.accelerations(moved, v)
+    ref = np.zeros_like(x)
+    for i in range(len(x)):  # the brute force, seen from each boid with the minimum image
+        y = x[i] + minimum_image(x - x[i], L)
+        ref[i] = brute_force(Boids(radius=2.0, separation=0.5, alignment=1.0, cohesion=0.3,
+                                   view_angle=view_angle), y, v)[i]
+    np.testing.assert_allclose(a, ref, atol=1e-10)
+    with pytest.raises(ValueError, match=r"box must be at least 2 x radius = 4 m"):
+        Boids(radius=2.0, box=3.0)

@@ -319,3 +319,124 @@ def test_lennard_jones_documented_helpers():
     shift = 4 * 2.0 * ((0.5 / 1.25) ** 12 - (0.5 / 1.25) ** 6)  # U at the default cutoff 2.5 sigma
     assert lj.pair_potential(r_min) == pytest.approx(-2.0 - shift)
     assert lj.pair_potential(np.array([1.25, 3.0])).tolist() == [0.0, 0.0]
+
+
+# -- Lennard-Jones in a periodic box: minimum image, virial, tail corrections --
+
+
+def periodic_liquid(cells, density, jitter, seed):
+    """An FCC lattice at `density` in its box, each particle moved by up to `jitter` (test helper)."""
+    from particles.liquids import fcc_lattice
+
+    x, box = fcc_lattice(cells, density)
+    return x + np.random.default_rng(seed).uniform(-jitter, jitter, x.shape), box
+
+
+@pytest.mark.parametrize("cells_per_cutoff", [1, 2, 3])
+def test_periodic_lennard_jones_cells_equal_all_pairs(cells_per_cutoff):
+    """In a box, the bucket grid with a skin gives the minimum-image all-pairs forces and virial."""
+    x, box = periodic_liquid((4, 5, 6), 0.86, 0.2, 0)
+    x[::7] += 3 * box  # some particles far outside: positions need not be wrapped
+    lj = LennardJones.from_epsilon_sigma(cutoff=2.5, skin=0.3, box=box, cells_per_cutoff=cells_per_cutoff)
+    ref = LennardJones.from_epsilon_sigma(cutoff=2.5, neighbors="all", box=box)
+    F, F_ref = lj(x), ref(x)
+    assert np.abs(F_ref).max() > 1.0
+    np.testing.assert_allclose(F, F_ref, rtol=0, atol=1e-10)
+    assert lj.last_virial == pytest.approx(ref.last_virial, rel=1e-12)
+    assert lj.virial(x) == pytest.approx(ref.last_virial, rel=1e-12)
+    assert np.abs(F.sum(axis=0)).max() < 1e-10  # pair forces: momentum conserved
+
+
+def test_periodic_lennard_jones_is_invariant_under_whole_box_shifts():
+    """Moving particles by whole box lengths changes no force and no energy."""
+    x, box = periodic_liquid(3, 0.8, 0.15, 1)
+    lj = LennardJones.from_epsilon_sigma(cutoff=2.5, skin=0.0, box=box)
+    F, U = lj(x), lj.potential_energy(x)
+    shift = np.random.default_rng(2).integers(-3, 4, size=x.shape) * box
+    np.testing.assert_allclose(lj(x + shift), F, atol=1e-10)
+    assert lj.potential_energy(x + shift) == pytest.approx(U, rel=1e-12)
+
+
+def test_periodic_force_is_minus_gradient_and_virial_is_minus_volume_derivative():
+    """F = -grad U (truncated U) and W = -dU/dlambda when positions and box scale by lambda."""
+    x, box = periodic_liquid(2, 0.7, 0.2, 3)  # 32 particles in a box of 3.6
+    lj = LennardJones.from_epsilon_sigma(cutoff=1.7, skin=0.0, box=box)
+    grad = numerical_gradient(lambda y: lj.potential_energy(y, shift=False), x, eps=1e-6)
+    np.testing.assert_allclose(lj(x), -grad, rtol=1e-6, atol=1e-6)
+
+    def energy(lam):
+        scaled = LennardJones.from_epsilon_sigma(cutoff=1.7, skin=0.0, box=lam * box)
+        return scaled.potential_energy(lam * x, shift=False)
+
+    dU = (energy(1 + 1e-6) - energy(1 - 1e-6)) / 2e-6  # no pair crosses the cutoff in between
+    assert lj.virial(x) == pytest.approx(-dU, rel=1e-6)
+
+
+def test_truncated_and_shifted_energies_differ_by_the_shift_per_pair():
+    """U_truncated - U_shifted = (pairs within the cutoff) U(r_c)."""
+    x, box = periodic_liquid(4, 0.86, 0.2, 4)
+    lj = LennardJones.from_epsilon_sigma(cutoff=2.5, box=box)
+    from particles.neighbors import cell_pairs
+
+    pairs = len(cell_pairs(x, 2.5, box=box)[0])
+    U_rc = 4 * (2.5**-12 - 2.5**-6)
+    difference = lj.potential_energy(x, shift=False) - lj.potential_energy(x)
+    assert difference == pytest.approx(pairs * U_rc, rel=1e-9)
+    assert lj.pair_potential(1.5, shift=False) == pytest.approx(4 * (1.5**-12 - 1.5**-6))
+    assert lj.pair_potential(2.6, shift=False) == 0.0
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_tail_corrections_equal_the_integrals_beyond_the_cutoff(d):
+    """u_tail and p_tail match numerical integrals of U and r f(r) beyond r_c (g = 1), in 2D and 3D."""
+    from scipy.integrate import quad
+
+    lj = LennardJones(k1=2.0, k2=1.5, m=13, n=7, cutoff=2.2)
+    rho, S = 0.7, {2: 2 * np.pi, 3: 4 * np.pi}[d]
+    U = lambda r: 2.0 / (12 * r**12) - 1.5 / (6 * r**6)  # f = -dU/dr, untruncated
+    u_num = 0.5 * rho * S * quad(lambda r: U(r) * r ** (d - 1), 2.2, np.inf)[0]
+    p_num = rho**2 / (2 * d) * S * quad(lambda r: r * lj.magnitude(r) * r ** (d - 1), 2.2, np.inf)[0]
+    u_tail, p_tail = lj.tail_corrections(rho, d=d)
+    assert u_tail == pytest.approx(u_num, rel=1e-8)
+    assert p_tail == pytest.approx(p_num, rel=1e-8)
+    nist = LennardJones.from_epsilon_sigma(cutoff=3.0).tail_corrections(0.86)
+    assert nist == pytest.approx((8 / 3 * np.pi * 0.86 * (3.0**-9 / 3 - 3.0**-3),
+                                  16 / 3 * np.pi * 0.86**2 * (2 / 3 * 3.0**-9 - 3.0**-3)), rel=1e-12)
+
+
+def test_tail_corrections_and_box_refuse_bad_input_by_name():
+    """density <= 0, d not 2 or 3, diverging tails and a box below 2 (cutoff + skin) raise ValueError."""
+    lj = LennardJones.from_epsilon_sigma(cutoff=3.0)
+    with pytest.raises(ValueError, match="density must be a positive finite number"):
+        lj.tail_corrections(0.0)
+    with pytest.raises(ValueError, match="d must be 2 or 3"):
+        lj.tail_corrections(0.5, d=1)
+    with pytest.raises(ValueError, match="tail integrals diverge"):
+        LennardJones(1.0, 1.0, 6, 3.5, 2.5).tail_corrections(0.5)
+    with pytest.raises(ValueError, match=r"box must be at least 2 x \(cutoff \+ skin\) = 6.6 m"):
+        LennardJones.from_epsilon_sigma(cutoff=3.0, skin=0.3, box=6.5)
+    with pytest.raises(ValueError, match="box must hold positive finite side lengths"):
+        LennardJones.from_epsilon_sigma(box=[10.0, -10.0, 10.0])
+
+
+def test_force_pass_in_chunks_equals_one_pass(monkeypatch):
+    """The force pass over chunks of pairs gives the forces and virial of a single pass."""
+    import particles.forces as forces
+
+    x, box = periodic_liquid(5, 0.86, 0.2, 5)
+    F_one = LennardJones.from_epsilon_sigma(cutoff=3.0, box=box)(x)
+    lj = LennardJones.from_epsilon_sigma(cutoff=3.0, box=box)
+    monkeypatch.setattr(forces, "_PAIR_CHUNK", 1000)  # many chunks (the 2 n floor: 1000 pairs each)
+    np.testing.assert_allclose(lj(x), F_one, rtol=0, atol=1e-10)
+    assert lj.last_virial == pytest.approx(lj.virial(x), rel=1e-12)
+
+
+def test_position_only_forces_say_so():
+    """Forces that ignore velocity and time declare it (the run may reuse them); damping does not."""
+    lj = LennardJones.from_epsilon_sigma()
+    assert not lj.uses_velocity and not lj.uses_time
+    assert not Gravity([0, -1]).uses_velocity and not NBodyGravity().uses_time
+    assert Damping(1.0).uses_velocity and not Damping(1.0).uses_time
+    assert Wind([1, 0], gust=0.5).uses_time and not Wind([1, 0]).uses_time
+    assert Attractor(lambda t: [t, 0.0], 1.0).uses_time and not Attractor([0, 0], 1.0).uses_time
+    assert not Field(lambda x, t: x).uses_velocity and Field(lambda x, t: x).uses_time

@@ -68,6 +68,15 @@ CLAIMS = [
     Claim("02_forces", "bucket grid more than 10 times faster than all pairs at N = 2000 (timing)",
           rf"N =  2000: all pairs .* ratio\s+{NUMBER}",
           10.0, AT_LEAST, None),
+    # the periodic liquid against NIST's table, within 3 combined standard errors of a 20-unit run
+    # (ours about 0.009 and 0.045, NIST's 0.0024 and 0.0136): the trajectory is chaotic, so another
+    # machine's round-off gives other means, as likely as these
+    Claim("02_forces", "periodic LJ liquid: U/N within 3 combined SE of NIST's -6.0305",
+          rf"U/N: ours {NUMBER} \+- ",
+          -6.0305, 0.03, "$U/N = -6.0305 \\pm 0.0024$"),
+    Claim("02_forces", "periodic LJ liquid: pressure within 3 combined SE of NIST's 1.2660",
+          rf"p: ours {NUMBER} \+- ",
+          1.2660, 0.14, "$p^* = 1.2660 \\pm 0.0136$"),
     # Lecture 3: the overshooting fixes and the bowl
     Claim("03_collisions", "projection's elastic ball climbs to 1.48 m in 20 bounces",
           rf"project\s+eps = 1, height after 20 bounces: {NUMBER} m",
@@ -141,7 +150,7 @@ CLAIMS = [
     Claim("06_mass_spring", "momentum balance with the pin forces closes",
           rf"largest \|dP/dt - \(M g \+ sum R\)\| = {NUMBER} N",
           0.0, 1e-9, None),
-    # Lecture 7: stiffness, Provot, sparsity
+    # Lecture 7: stiffness, Provot, sparsity, solving the implicit step
     Claim("07_stiffness_provot_implicit", "h_max falls like k^(-1/2)",
           rf"symplectic_euler: fitted slope {NUMBER}",
           -0.5, 5e-4, "$-1/2$"),
@@ -154,6 +163,12 @@ CLAIMS = [
     Claim("07_stiffness_provot_implicit", "Provot's curtain: 10.4% after 200 steps",
           rf"with the constraint: {NUMBER}% after 200 steps",
           10.4, 0.05, None),
+    Claim("07_stiffness_provot_implicit", "one linearized solve per step gains 11% of M g H",
+          rf"Baraff-Witkin, one solve \(paper\)\s+1\.00 solves\s+{NUMBER}%",
+          11.17, 0.05, "11% of $MgH$"),
+    Claim("07_stiffness_provot_implicit", "Liu's 10 iterations hold the falling cloth back (0.17 m at 0.5 s)",
+          rf"prefactored, 10 iterations \(Liu\)\s+10 iterations\s+\S+%\s+\S+%\s+\S+%\s+{NUMBER} m",
+          0.167, 0.005, "0.17 m"),
     Claim("07_stiffness_provot_implicit", "the 48 x 48 cloth's K is 0.55% full",
           rf"48 x 48 cloth: .* fill K\.nnz / \(3n\)\^2 = {NUMBER}%",
           0.55, 5e-3, "0.55%"),
@@ -188,12 +203,12 @@ def _ids(claims):
     return [f"{c.lecture[:2]}-{re.sub(r'[^a-z0-9]+', '-', c.claim.lower()).strip('-')[:50]}" for c in claims]
 
 
-def test_every_lecture_has_three_to_six_claims():
-    """The table names every lecture of lectures/ with 3 to 6 claims, each with a number group."""
+def test_every_lecture_has_three_to_eight_claims():
+    """The table names every lecture of lectures/ with 3 to 8 claims, each with a number group."""
     lectures = sorted(p.stem for p in (ROOT / "lectures").glob("[0-9][0-9]_*.ipynb"))
     counts = {name: sum(c.lecture == name for c in CLAIMS) for name in lectures}
     assert set(c.lecture for c in CLAIMS) <= set(lectures), "a claim names a lecture that does not exist"
-    assert all(3 <= k <= 6 for k in counts.values()), counts
+    assert all(3 <= k <= 8 for k in counts.values()), counts
     assert all(re.compile(c.pattern).groups >= 1 for c in CLAIMS)
 
 

@@ -33,6 +33,7 @@ def chain_statics(m, k, L0, A, B):
 
 
 def test_string_structure_and_errors():
+    """A string's springs, rest lengths and pins; bad pins, counts and scalings are named in the error."""
     s = string(10, 2.0)
     assert s.n == 10 and list(s.springs) == ["structural"]
     np.testing.assert_allclose(s.springs["structural"].rest_length, 2.0 / 9)
@@ -98,28 +99,54 @@ def test_naive_string_changes_with_resolution():
 
 
 def test_physical_masses_and_stiffness_of_string():
+    """Physical string: masses add up to density x length (half at the ends), k = EA / L0."""
     s = string(11, 2.0, scaling="physical", linear_density=0.3, stretch_modulus=8.0)
     assert s.m.sum() == pytest.approx(0.6)
     assert s.m[0] == pytest.approx(s.m[1] / 2)
     np.testing.assert_allclose(s.springs["structural"].k, 8.0 / 0.2)
 
 
-def test_hair_droops_like_a_cantilever():
-    """Tip deflection converges (first order) to q L^4 / (8 EI), and stiffer hair droops less."""
-    EI, mu, L = 0.2, 0.05, 0.3
-    theory = mu * g * L**4 / (8 * EI)
+def cantilever_ratios(ns, pin, EI=0.2, mu=0.05, L=0.3):
+    """Relaxed tip deflection over beam theory's q L^4 / (8 EI) for hairs of ns particles (a test helper)."""
     ratios = []
-    for n in (21, 41, 81):
-        h = hair(n, L, scaling="physical", linear_density=mu, bending_modulus=EI, stretch_modulus=1e4)
+    for n in ns:
+        h = hair(n, L, pin=pin, scaling="physical", linear_density=mu, bending_modulus=EI, stretch_modulus=1e4)
         relax(h)
-        ratios.append(-h.X[-1, 0, 1] / theory)
-    errors = np.abs(np.array(ratios) - 1)
-    assert errors[1] < 0.6 * errors[0] and errors[2] < 0.6 * errors[1]
-    assert errors[2] < 0.03
-    # small deflections: twice as stiff, half the droop
-    stiff = hair(21, L, scaling="physical", linear_density=mu, bending_modulus=2 * EI, stretch_modulus=1e4)
-    relax(stiff)
-    assert -stiff.X[-1, 0, 1] / theory == pytest.approx(ratios[0] / 2, rel=0.01)
+        ratios.append(-h.X[-1, 0, 1] / (mu * g * L**4 / (8 * EI)))
+    return np.array(ratios)
+
+
+def test_hair_droops_like_a_cantilever():
+    """Issue 13: the clamped hair's tip deflection converges at second order to q L^4 / (8 EI); stiffer droops less."""
+    ns = (11, 21, 41)
+    errors = np.abs(cantilever_ratios(ns, "root") - 1)
+    orders = np.log2(errors[:-1] / errors[1:])  # the spacing halves from one to the next
+    assert np.all(orders > 1.8), orders
+    assert errors[0] < 0.015 and errors[2] < 1e-3
+    # small deflections: twice as stiff, half the droop (the same ratio to q L^4 / (8 EI))
+    assert cantilever_ratios([21], "root", EI=0.4)[0] == pytest.approx(cantilever_ratios([21], "root")[0], rel=0.01)
+
+
+def test_two_pinned_root_particles_clamp_half_a_segment_in():
+    """pin="pair" (the first segment held) droops ((n - 2) / (n - 1))^2 of beam theory: a first-order error."""
+    ns = np.array([11, 21, 41])
+    np.testing.assert_allclose(cantilever_ratios(ns, "pair"), ((ns - 2) / (ns - 1)) ** 2, rtol=2e-4)
+
+
+def test_hair_root_clamp_structure():
+    """The default clamp pins the root only and holds the first segment along the hair's direction."""
+    from particles.springs import Clamp
+
+    h = hair(6, 0.3, direction=[0.0, -1.0])
+    assert h.pinned.tolist() == [0]
+    clamps = [f for f in h.other_forces() if isinstance(f, Clamp)]
+    assert len(clamps) == 1 and clamps[0].i.tolist() == [0] and clamps[0].j.tolist() == [1]
+    np.testing.assert_allclose(clamps[0].direction, [[0.0, -1.0]])
+    np.testing.assert_allclose(clamps[0].kb, 2 * 0.002)  # twice a joint's kb: the mirrored ghost node
+    assert hair(6, 0.3, pin="pair").pinned.tolist() == [0, 1]
+    assert not any(isinstance(f, Clamp) for f in hair(6, 0.3, pin="pair").other_forces())
+    with pytest.raises(ValueError, match="pin must be 'root', 'pair', 'top' or 'none', got 'both'"):
+        hair(6, 0.3, pin="both")
 
 
 def test_cloth_spring_sets():
@@ -140,6 +167,7 @@ def test_cloth_spring_sets():
 
 
 def test_cloth_pins_by_name_and_index():
+    """Pins by point name, by index or a mix; unknown names and out-of-range indices are refused."""
     c = cloth(6, 5, pins="top corners")
     assert c.pinned.tolist() == [0, 5]
     assert cloth(6, 5, pins=["top left", 29]).pinned.tolist() == [0, 29]
@@ -169,6 +197,7 @@ def test_physical_cloth_masses_and_stiffness():
 
 
 def test_naive_defaults_equal_physical_at_reference_resolution():
+    """Naive defaults equal the physical interior mass and stiffnesses at the 8 x 8 reference grid."""
     naive, physical = cloth(8, 8, scaling="naive"), cloth(8, 8, scaling="physical")
     interior = np.arange(64).reshape(8, 8)[1:-1, 1:-1].ravel()
     np.testing.assert_allclose(naive.m[interior], physical.m[interior])
@@ -198,8 +227,7 @@ def test_point_pins_concentrate_strain_under_refinement():
 
 
 def test_cloth_damping_and_wind_options():
-    """Viscous damping is per unit mass under physical scaling (F = -damping m v), per particle under naive;
-    wind adds its force; at rest the pins carry weight plus wind."""
+    """Damping is per unit mass (physical) or per particle (naive); wind adds its force; pins carry weight and wind."""
     rng = np.random.default_rng(3)
     for scaling, per_mass in (("physical", True), ("naive", False)):
         c = cloth(5, 5, damping=0.3, gravity=0.0, scaling=scaling)

@@ -130,3 +130,103 @@ def test_verlet_list_does_not_rebuild_on_non_finite_positions():
     assert len(i) == 0
     with pytest.raises(ValueError, match="x must be finite"):
         cell_pairs(y, 1.0)  # the grid itself still refuses them
+
+
+# -- periodic boxes ------------------------------------------------------------
+
+
+@pytest.mark.parametrize("d", [1, 2, 3])
+@pytest.mark.parametrize("k", [1, 2, 3])
+def test_periodic_cell_pairs_equal_minimum_image_all_pairs(d, k):
+    """In a box, the grid finds exactly the minimum-image pairs, each once, for unwrapped positions."""
+    rng = np.random.default_rng(100 + 10 * d + k)
+    for sides in ([2.0] * d, rng.uniform(2.0, 5.0, d)):  # the smallest box allowed, and others
+        L = 1.3 * np.array(sides)
+        x = rng.uniform(-2, 3, size=(250, d)) * L  # anywhere: the grid wraps a copy
+        i, j = cell_pairs(x, 1.3, cells_per_cutoff=k, box=L)
+        assert np.all(i != j) and len(as_set(i, j)) == len(i) > 0
+        assert as_set(i, j) == as_set(*all_pairs(x, 1.3, box=L))
+
+
+def test_periodic_pairs_through_the_walls():
+    """Two points near opposite faces are neighbours; positions shifted by whole boxes change nothing."""
+    x = np.array([[0.1, 5.0], [9.9, 5.0], [5.0, 0.2], [5.0, 9.7], [5.0, 5.0]])
+    assert as_set(*cell_pairs(x, 1.0, box=10.0)) == {(0, 1), (2, 3)}
+    moved = x + np.array([[10.0, 0.0], [-20.0, 30.0], [0.0, 0.0], [0.0, -10.0], [40.0, 40.0]])
+    assert as_set(*cell_pairs(moved, 1.0, box=10.0)) == {(0, 1), (2, 3)}
+    assert as_set(*cell_pairs(x, 1.0)) == set()  # open space: far apart
+
+
+def test_periodic_lattice_on_cell_faces_and_sparse_box():
+    """Points exactly on cell faces, and a few points in a huge box (fewer, larger cells), stay exact."""
+    g = np.arange(8) * 0.5
+    lattice = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)
+    for k in (1, 2, 3):
+        i, j = cell_pairs(lattice, 1.0, cells_per_cutoff=k, box=4.0)
+        assert len(i) == 512 * 26 // 2  # 6 + 12 + 8 neighbours closer than 1 each
+    rng = np.random.default_rng(4)
+    x = rng.uniform(0, 1e4, size=(40, 3))
+    x[1], x[3] = x[0] + [0.3, 0.0, 0.0], [1e4 - 0.1, 5.0, 5.0]
+    x[2] = [0.2, 5.0, 5.1]
+    grid = CellGrid(x, 1.0, box=1e4)
+    assert np.prod(grid.shape) < 1e5
+    assert as_set(*grid.pairs()) == as_set(*all_pairs(x, 1.0, box=1e4)) == {(0, 1), (2, 3)}
+
+
+def test_ranked_pairs_are_the_pairs_in_cell_order():
+    """pairs(ranks=True) gives a permutation and ranks whose pairs are those of pairs()."""
+    rng = np.random.default_rng(5)
+    x = rng.uniform(0, 6, size=(300, 3))
+    for box in (None, 6.0):
+        grid = CellGrid(x, 1.2, box=box)
+        perm, i, j = grid.pairs(ranks=True)
+        assert sorted(perm.tolist()) == list(range(300))
+        a, b = grid.pairs()
+        np.testing.assert_array_equal(perm[i], a)
+        np.testing.assert_array_equal(perm[j], b)
+
+
+@pytest.mark.parametrize("box, match", [
+    (0.0, "box must hold positive finite side lengths"),
+    ([3.0, -1.0], "box must hold positive finite side lengths"),
+    ([3.0, np.inf], "box must hold positive finite side lengths"),
+    ([3.0, 3.0, 3.0], "box must have 2 side lengths"),
+    ([3.0, 1.9], r"box must be at least 2 x cutoff = 2 m along every axis"),
+])
+def test_bad_boxes_are_refused_by_name(box, match):
+    """A box that is not positive, has the wrong length, or is shorter than 2 cutoffs raises naming box."""
+    with pytest.raises(ValueError, match=match):
+        cell_pairs(np.zeros((3, 2)), 1.0, box=box)
+    with pytest.raises(ValueError, match=match):
+        all_pairs(np.zeros((3, 2)), 1.0, box=box)
+
+
+def test_box_and_bounds_exclude_each_other_and_the_list_checks_its_skin():
+    """bounds and box together are refused; a Verlet list needs a box of 2 (cutoff + skin)."""
+    with pytest.raises(ValueError, match="not both"):
+        CellGrid(np.zeros((2, 2)), 1.0, bounds=([0, 0], [1, 1]), box=5.0)
+    with pytest.raises(ValueError, match=r"box must be at least 2 x \(cutoff \+ skin\) = 2.6 m"):
+        VerletList(cutoff=1.0, skin=0.3, box=2.5)
+    VerletList(cutoff=1.0, skin=0.3, box=2.6)
+
+
+def test_periodic_verlet_list_stores_the_images():
+    """The list's minimum_image maps x_i - x_j to the nearest copy, also after moves and for chunks."""
+    from particles.forces import pair_differences
+    from particles.periodic import minimum_image
+
+    rng = np.random.default_rng(6)
+    L = np.array([5.0, 6.0, 7.0])
+    x = rng.uniform(0, 1, size=(400, 3)) * L
+    vl = VerletList(cutoff=1.0, skin=0.4, box=L)
+    for step in range(3):
+        i, j = vl.pairs(x)
+        r = pair_differences(x, i, j)
+        expected = minimum_image(r, L, axis=0)
+        np.testing.assert_allclose(vl.minimum_image(r.copy()), expected, atol=1e-12)
+        half = len(i) // 2  # a chunk of the list: pairs half:
+        np.testing.assert_allclose(vl.minimum_image(r[:, half:].copy(), half, len(i)), expected[:, half:],
+                                   atol=1e-12)
+        x = x + rng.uniform(-0.05, 0.05, x.shape)  # small moves: the list and its images stay
+    assert vl.builds == 1
+    assert as_set(*vl.pairs(x)) >= as_set(*all_pairs(x, 1.0, box=L))

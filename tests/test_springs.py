@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from particles.springs import Bending, Springs
+from particles.springs import Bending, Clamp, Springs
 
 
 def random_springs(d, seed=0, kd=True):
@@ -43,6 +43,7 @@ def test_single_spring_formula():
 
 
 def test_rest_length_defaults_to_current_distance():
+    """Without rest_length the springs rest at the given positions: no force, no strain."""
     x = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 1.0]])
     s = Springs([[0, 1], [1, 2]], k=5.0, x=x)
     np.testing.assert_allclose(s.rest_length, [np.sqrt(2), 1.0])
@@ -61,6 +62,7 @@ def test_damped_springs_conserve_momentum(d):
 
 @pytest.mark.parametrize("d", [2, 3])
 def test_momentum_conserved_and_force_is_minus_energy_gradient(d):
+    """Spring forces sum to zero and equal minus the gradient of the elastic energy."""
     s, x, v = random_springs(d, kd=False)
     F = s(x)
     assert np.abs(F.sum(axis=0)).max() < 1e-12
@@ -91,6 +93,7 @@ def test_clamped_jacobian_is_symmetric_negative_semidefinite():
 
 
 def test_coincident_particles_give_no_force():
+    """Two particles at the same point (no direction) get no force rather than NaN."""
     s = Springs([[0, 1]], rest_length=1.0, k=1.0)
     F = s(np.zeros((2, 3)))
     assert np.all(F == 0.0)
@@ -153,6 +156,7 @@ def test_bending_zero_for_straight_chain_and_proportional_to_angle():
 
 @pytest.mark.parametrize("d", [2, 3])
 def test_bending_no_net_force_or_torque_and_gradient(d):
+    """Bending forces have no net force or torque and equal minus the energy gradient."""
     rng = np.random.default_rng(d)
     x = rng.normal(size=(6, d))
     triples = [[0, 1, 2], [1, 2, 3], [2, 3, 4], [3, 4, 5]]
@@ -166,7 +170,47 @@ def test_bending_no_net_force_or_torque_and_gradient(d):
 
 
 def test_bending_rest_angles_from_positions():
+    """Rest angles taken from positions give no force there."""
     x = chain_with_kink(0.3)
     b = Bending([[0, 1, 2]], kb=1.0, x=x)
     assert b.rest_angle[0] == pytest.approx(0.3)
     np.testing.assert_allclose(b(x), 0.0, atol=1e-12)
+
+
+# -- clamp ---------------------------------------------------------------------
+
+
+def test_clamp_is_a_bending_joint_with_a_fixed_first_segment():
+    """A clamp along u0 gives the force of a Bending joint whose first particle sits at x_i - u0 (a ghost)."""
+    rng = np.random.default_rng(5)
+    x = np.array([[0.0, 0.0], [1.0, 0.0]]) + 0.3 * rng.normal(size=(2, 2))
+    clamp = Clamp([[0, 1]], direction=[2.0, 0.0], kb=1.5)  # direction normalized
+    ghost = np.vstack([x[:1] - [1.0, 0.0], x])
+    joint = Bending([[0, 1, 2]], kb=1.5)(ghost)
+    F = clamp(x)
+    np.testing.assert_allclose(F[1], joint[2], rtol=1e-12)
+    np.testing.assert_allclose(F.sum(axis=0), 0.0, atol=1e-14)  # the root (a pin) takes the reaction
+    assert clamp.angles(x)[0] == pytest.approx(Bending([[0, 1, 2]]).angles(ghost)[0])
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_clamp_force_is_minus_energy_gradient_and_proportional_to_angle(d):
+    """F = -grad(kb theta^2 / 2) for several clamps; zero along u0, linear in a small angle."""
+    rng = np.random.default_rng(d)
+    x = rng.normal(size=(4, d))
+    clamp = Clamp([[0, 1], [2, 3]], direction=rng.normal(size=(2, d)), kb=[0.7, 1.3])
+    grad = fd_jacobian(lambda y: np.array(clamp.potential_energy(y)), x).reshape(x.shape)
+    np.testing.assert_allclose(clamp(x), -grad, rtol=1e-6, atol=1e-7)
+    straight = Clamp([[0, 1]], direction=np.eye(d)[0], kb=2.0)
+    np.testing.assert_allclose(straight(chain_with_kink(0.0, d)[1:]), 0.0, atol=1e-15)
+    f1, f2 = (np.linalg.norm(straight(np.array([np.zeros(d), chain_with_kink(a, d)[2] - chain_with_kink(a, d)[1]]))[1])
+              for a in (0.01, 0.02))
+    assert f2 / f1 == pytest.approx(2.0, rel=1e-3) and f1 == pytest.approx(2.0 * 0.01, rel=1e-3)
+
+
+def test_clamp_checks_its_directions():
+    """Directions must be non-zero and one per clamp (or one for all)."""
+    with pytest.raises(ValueError, match="direction must be non-zero"):
+        Clamp([[0, 1]], direction=[0.0, 0.0])
+    with pytest.raises(ValueError, match=r"direction must have shape \(d,\) or \(2, d\)"):
+        Clamp([[0, 1], [1, 2]], direction=np.ones((3, 2)))

@@ -297,3 +297,83 @@ def test_runs_name_t_end_when_it_is_before_the_current_time():
         flock.run(-1.0, 0.1)
     with pytest.raises(ValueError, match="t_end must be >= the current time t = 0.0 s of the effect"):
         ParticleEffect(d=2).run(-1.0, 0.1)
+
+
+# -- force reuse: one force evaluation per velocity-Verlet step ---------------
+
+
+class CountingForce:
+    """A position-only force that counts its evaluations (test helper): a spring to the origin."""
+
+    uses_velocity = False
+    uses_time = False
+
+    def __init__(self):
+        self.calls = 0
+
+    def add_to(self, F, x, v, t, m):
+        self.calls += 1
+        F -= x
+
+
+def lennard_jones_box(seed=0):
+    """64 particles of a jittered lattice in a periodic box with Lennard-Jones forces (test helper)."""
+    from particles.forces import LennardJones
+
+    rng = np.random.default_rng(seed)
+    g = np.arange(4) * 2.0
+    x = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3) + rng.uniform(-0.1, 0.1, (64, 3))
+    return x, rng.normal(size=x.shape), LennardJones.from_epsilon_sigma(box=8.0)
+
+
+def test_verlet_run_evaluates_forces_once_per_step():
+    """N verlet steps of position-only forces cost N + 1 force evaluations, not 2 N."""
+    from particles.integrators import verlet
+
+    x, v, lj = lennard_jones_box()
+    count = CountingForce()
+    ps = ParticleSystem(x, v=v, forces=[lj, count])
+    t, X = ps.run(0.5, 0.005, method="verlet")
+    assert len(t) - 1 == 100 and count.calls == 101
+    assert verlet.fsal and verlet.order == 2
+    ps.step(0.005, method="verlet")  # a single step: its start force is not known
+    assert count.calls == 103
+
+
+def test_reused_forces_give_the_same_trajectory_to_the_last_bit():
+    """The run with force reuse equals the plain stepper loop (2 evaluations per step) bit for bit."""
+    from particles import integrate
+
+    x, v, lj = lennard_jones_box(1)
+    v[3] = 0.0
+    ps = ParticleSystem(x, v=v, forces=[lj, CountingForce()], pinned=[3])
+    t, X = ps.run(0.4, 0.004, method="verlet", every=5)
+    ref = ParticleSystem(x, v=v, forces=[lj, CountingForce()], pinned=[3])
+    lj.reset()
+    t_ref, X_ref = integrate(ref.derivative, ref.X, 0.0, 0.4, 0.004, method="verlet", every=5)
+    assert ref.forces[1].calls == 2 * 100 and ps.forces[1].calls == 101
+    np.testing.assert_array_equal(X, X_ref)
+    np.testing.assert_array_equal(X[:, 3, 0], np.broadcast_to(x[3], X[:, 3, 0].shape))  # the pin holds
+
+
+def test_velocity_dependent_or_other_steppers_are_not_reused():
+    """With damping in the forces, or with RK4, every stage is evaluated (no stale force is reused)."""
+    count = CountingForce()
+    ps = ParticleSystem([[1.0, 0.0]], forces=[count, Damping(0.5)])
+    ps.run(0.1, 0.01, method="verlet")
+    assert count.calls == 20
+    ps = ParticleSystem([[1.0, 0.0]], forces=[CountingForce()])
+    ps.run(0.1, 0.01, method="rk4")
+    assert ps.forces[0].calls == 40
+
+
+def test_time_dependent_forces_are_reused_only_at_the_same_time():
+    """A force of position and time is recomputed whenever the time differs, so results stay exact."""
+    from particles import integrate
+
+    field = Field(lambda x, t: -x * (1.0 + np.sin(3 * t)))
+    ps = ParticleSystem([[1.0, 0.0], [0.0, 2.0]], v=[[0.0, 1.0], [1.0, 0.0]], forces=[field])
+    t, X = ps.run(1.0, 0.01, method="verlet")
+    ref = ParticleSystem([[1.0, 0.0], [0.0, 2.0]], v=[[0.0, 1.0], [1.0, 0.0]], forces=[field])
+    _, X_ref = integrate(ref.derivative, ref.X, 0.0, 1.0, 0.01, method="verlet")
+    np.testing.assert_array_equal(X, X_ref)
