@@ -13,6 +13,7 @@ The tests run in a separate process, as in the autograder, so a stuck loop in
 your code stops that process, not your kernel.
 """
 
+import html
 import tempfile
 from pathlib import Path
 
@@ -26,12 +27,17 @@ __all__ = ["check", "CheckResult"]
 class CheckResult:
     """The outcome of :func:`check`: shown as a table in a notebook, as text elsewhere.
 
+    In a notebook (``_repr_html_``) the table is followed, under each test
+    that attached some, by figures of your curve beside the reference's
+    (inline PNG images, see :mod:`particles.course.figures`).
+
     Attributes
     ----------
     exercise : str
     score, max_score : float
     tests : list of dict
-        One record per public test: ``name``, ``points``, ``passed``, ``reason``.
+        One record per public test: ``name``, ``points``, ``passed``, ``reason``
+        and, when the test drew some, ``figures``.
     notes : list of str
         Remarks from loading your code (errors at definition time, syntax errors).
     """
@@ -69,6 +75,33 @@ class CheckResult:
         rows += [""] + [f"- {n}" for n in self.notes]
         if self.passed:
             rows.append("All public tests pass. The autograder adds hidden tests with random parameters.")
+        return "\n".join(rows)
+
+
+    def _repr_html_(self):
+        """The table, with the figures of the tests that attached some (inline PNG), for Jupyter."""
+        from . import figures
+
+        e = html.escape
+        rows = [f"<p><b>{e(self.exercise)}: {self.score:g} / {self.max_score:g} points on the public tests</b> "
+                f"(checked {e(self.source)})</p>",
+                '<table><thead><tr><th></th><th style="text-align:left">test</th>'
+                '<th style="text-align:left">what to fix</th></tr></thead><tbody>']
+        for t in self.tests:
+            reason = "" if t["passed"] else e(t["reason"])
+            rows.append(f"<tr><td>{'✅' if t['passed'] else '❌'}</td><td style=\"text-align:left\">{e(t['name'])}</td>"
+                        f"<td style=\"text-align:left\">{reason}</td></tr>")
+            if t.get("figures"):  # open under a failed test, folded under a passed one
+                shown = "".join(f'<div style="display:inline-block;margin:0 .5em .5em 0">'
+                                f"{figures.figure_html(f, css=False)}</div>" for f in t["figures"])
+                rows.append(f'<tr><td></td><td colspan="2" style="text-align:left"><details'
+                            f'{"" if t["passed"] else " open"}><summary>your curve beside the reference</summary>'
+                            f"{shown}</details></td></tr>")
+        rows.append("</tbody></table>")
+        if self.notes:
+            rows.append("<ul>" + "".join(f"<li>{e(n)}</li>" for n in self.notes) + "</ul>")
+        if self.passed:
+            rows.append("<p>All public tests pass. The autograder adds hidden tests with random parameters.</p>")
         return "\n".join(rows)
 
 

@@ -35,6 +35,7 @@ Which notebooks are graded, and as which student and exercise, is decided in
 :mod:`particles.course.discovery`.
 """
 
+import hashlib
 import json
 import math
 import os
@@ -52,7 +53,7 @@ from . import isolation as isolation_module
 from .discovery import Unit, find_submissions, notebook_digest, written_answers
 from .paths import exercise_tests, project_root
 from .process import library_parent
-from .reports import feedback_markdown, gradescope_results, write_gradebook, write_json
+from .reports import feedback_html, feedback_markdown, gradescope_results, write_gradebook, write_json
 from .runner import check_limit
 from .signing import TOKEN_FD, read_records, sign_records
 from .store import RecordStore
@@ -287,7 +288,8 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         Notebooks, or folders of notebooks (see :mod:`particles.course.discovery`).
     out : path, optional
         Output folder: ``gradebook.csv``, ``<student>/results.json``,
-        ``<student>/feedback.md``, ``records/`` (one record per notebook,
+        ``<student>/feedback.md`` and ``<student>/feedback.html`` (with the
+        tests' figures), ``records/`` (one record per notebook,
         written as soon as it is graded) and ``logs/``. Nothing is written
         without it.
     jobs : int
@@ -444,8 +446,15 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     return summary
 
 
+_written = {}  # (folder, hidden_visibility) -> digest of the results its files were last written from
+
+
 def _write_outputs(out, done, tests, hidden_visibility, students=None):
-    """results.json and feedback.md of `students` (default: all), and the gradebook, from the records so far."""
+    """results.json, feedback.md and feedback.html of `students` (default: all), and the gradebook, so far.
+
+    A student's files are rewritten only when their results changed since this
+    process last wrote them (the final call of a run then draws no figure again).
+    """
     by_student = {}
     for (student, _), result in done.items():
         by_student.setdefault(student, []).append(result)
@@ -454,8 +463,16 @@ def _write_outputs(out, done, tests, hidden_visibility, students=None):
         results.sort(key=lambda r: order.get(r["exercise"], len(order)))
     for student in (by_student if students is None else set(students)):
         folder = out / student
+        results = by_student[student]
+        key = (str(folder.resolve()), hidden_visibility)
+        digest = hashlib.sha256(json.dumps(results, sort_keys=True, default=str).encode()).hexdigest()
+        names = ("results.json", "feedback.md", "feedback.html")
+        if _written.get(key) == digest and all((folder / name).exists() for name in names):
+            continue
         folder.mkdir(parents=True, exist_ok=True)
-        write_json(folder / "results.json", gradescope_results(student, by_student[student], hidden_visibility))
-        (folder / "feedback.md").write_text(feedback_markdown(student, by_student[student]))
+        write_json(folder / "results.json", gradescope_results(student, results, hidden_visibility))
+        (folder / "feedback.md").write_text(feedback_markdown(student, results))
+        (folder / "feedback.html").write_text(feedback_html(student, results), encoding="utf-8")
+        _written[key] = digest
     exercises = [name for name in tests if any(r["exercise"] == name for rs in by_student.values() for r in rs)]
     write_gradebook(out / "gradebook.csv", by_student, exercises)

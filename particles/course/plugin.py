@@ -24,6 +24,15 @@ Fixtures:
     seed and the test's name: the same seed reproduces the same parameters.
 ``grading_seed``
     The seed itself (an int), recorded in the results.
+``feedback``
+    A :class:`particles.course.figures.Feedback`: ``feedback.curve(title,
+    xlabel, ylabel, series=[{"label": "yours", "x": [...], "y": [...]},
+    {"label": "reference", ...}], loglog=True)`` attaches the data of a
+    figure to the test's record (``figures``: plain JSON, a few hundred
+    points per series at most); the driver draws it in ``feedback.html``
+    and Gradescope's output, ``particles.check`` in the notebook. Attach
+    before the check that may fail, and keep a hidden test's parameters
+    out of the texts.
 
 Options: ``--submission NOTEBOOK`` (default: ``solutions/NN_topic.ipynb`` when
 it exists, the master, else ``exercises/NN_topic.ipynb``, the student's own
@@ -58,6 +67,7 @@ import numpy as np
 import pytest
 
 from .code import SubmissionCode, notebook_cells
+from .figures import Feedback
 from .isolation import Plan, protect_this_process
 from .signing import TOKEN_FD, sign_records
 from .paths import project_root
@@ -244,6 +254,14 @@ def rng(request, _particles_job):
     return np.random.default_rng([int(_particles_job["seed"]), zlib.crc32(key.encode())])
 
 
+@pytest.fixture
+def feedback(request):
+    """Figures for this test's feedback: ``feedback.curve(title, xlabel, ylabel, series, loglog=True)``."""
+    board = Feedback(hidden=request.node.get_closest_marker("hidden") is not None)
+    request.node._particles_feedback = board
+    return board
+
+
 def _reason(excinfo):
     error = excinfo.value
     if isinstance(error, GradingFailure):
@@ -274,6 +292,9 @@ def record_of(item, outcome, excinfo, seconds):
     }
     if excinfo is not None and outcome != "passed":
         record["reason"], record["grader_error"] = _reason(excinfo)
+    board = getattr(item, "_particles_feedback", None)
+    if board is not None and board.figures:  # data only: the driver draws
+        record["figures"] = board.figures
     return record
 
 

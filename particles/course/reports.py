@@ -1,14 +1,27 @@
-"""What grading writes: Gradescope ``results.json``, a gradebook CSV, Markdown feedback.
+"""What grading writes: Gradescope ``results.json``, a gradebook CSV, Markdown and HTML feedback.
 
-All three are made from the same records: per submission (a student), per
+All are made from the same records: per submission (a student), per
 exercise, one record per test with ``test``, ``name``, ``points``,
-``hidden``, ``passed``, ``reason``, ``seed`` (see :mod:`particles.course.plugin`).
+``hidden``, ``passed``, ``reason``, ``seed`` and, when the test attached
+some, ``figures`` (see :mod:`particles.course.plugin` and
+:mod:`particles.course.figures`). Figures are drawn here, as inline PNG
+images: in ``feedback.html`` (one self-contained page per student: inline
+CSS and images, no scripts, no network) and in the Gradescope output of
+the tests that have them (``"output_format": "html"``; the others stay
+plain text). Importing this module loads Matplotlib's Agg canvas, so that
+the grading driver has all its code loaded before its first worker starts.
 """
 
 import csv
+import html
 import json
 
-__all__ = ["score_of", "gradescope_results", "feedback_markdown", "write_gradebook", "VISIBILITIES"]
+from . import figures
+
+__all__ = ["score_of", "gradescope_results", "feedback_markdown", "feedback_html", "write_gradebook",
+           "VISIBILITIES"]
+
+figures.load()
 
 VISIBILITIES = ("hidden", "after_due_date", "after_published", "visible")
 """Gradescope's visibility settings of a test."""
@@ -52,13 +65,19 @@ def gradescope_results(student, results, hidden_visibility="after_published"):
         if result.get("sandbox"):
             lines.append(f"  Sandbox of your code: {result['sandbox']}")
         for k, test in enumerate(result["tests"], start=1):
+            output, output_format = _test_output(test, result.get("seed")), "text"
+            if test.get("figures"):  # the student's curve beside the reference's, inline
+                output = (f"<p>{html.escape(output)}</p>"
+                          + "".join(figures.figure_html(f, css=False) for f in test["figures"]))
+                output_format = "html"
             tests.append({
                 "name": f"{result['exercise']}: {test['name']}",
                 "number": f"{result['exercise'][:2]}.{k}",
                 "score": test["points"] if test["passed"] else 0.0,
                 "max_score": test["points"],
                 "status": "passed" if test["passed"] else "failed",
-                "output": _test_output(test, result.get("seed")),
+                "output": output,
+                "output_format": output_format,
                 "visibility": hidden_visibility if test["hidden"] else "visible",
                 "tags": [result["exercise"]] + (["hidden"] if test["hidden"] else []),
                 "extra_data": {"test": test["test"]},
@@ -69,6 +88,7 @@ def gradescope_results(student, results, hidden_visibility="after_published"):
         "max_score": top,
         "execution_time": round(sum(r.get("seconds", 0.0) for r in results), 2),
         "output": "\n".join(lines),
+        "output_format": "simple_format",
         "visibility": "visible",
         "stdout_visibility": "hidden",
         "extra_data": {"student": student, "seeds": {r["exercise"]: r.get("seed") for r in results},
@@ -85,6 +105,8 @@ def feedback_markdown(student, results):
     """Per-student feedback in Markdown: scores, a table of tests, reasons, how to reproduce."""
     score, top = score_of([t for r in results for t in r["tests"]])
     out = [f"# Feedback for {student}", "", f"**Total: {_fmt(score)} / {_fmt(top)} points**", ""]
+    if any(t.get("figures") for r in results for t in r["tests"]):
+        out += ["Figures of your curves beside the reference's are in `feedback.html`, beside this file.", ""]
     for result in results:
         s, m = score_of(result["tests"])
         out += [f"## {result['exercise']}: {_fmt(s)} / {_fmt(m)}", ""]
@@ -104,6 +126,97 @@ def feedback_markdown(student, results):
             out.append(f"- Hidden tests drew their random parameters with seed {result['seed']}.")
         out.append("")
     return "\n".join(out).rstrip("\n") + "\n"
+
+
+_CSS = """
+body { font: 15px/1.45 system-ui, -apple-system, "Segoe UI", Roboto, sans-serif; color: #1d1d1f;
+       background: #fafafa; margin: 0; }
+main { max-width: 60rem; margin: 0 auto; padding: 1.5rem 1.25rem 3rem; }
+h1 { font-size: 1.6rem; margin: 0 0 .25rem; }
+h2 { font-size: 1.2rem; margin: 2rem 0 .5rem; padding-bottom: .25rem; border-bottom: 1px solid #ddd; }
+.total { font-size: 1.1rem; font-weight: 600; }
+.meta, .notes { color: #555; font-size: .9rem; }
+table { border-collapse: collapse; width: 100%; background: #fff; table-layout: fixed; }
+col.mark { width: 2rem; } col.test { width: 42%; } col.points { width: 5.5rem; }
+td { overflow-wrap: anywhere; }
+th, td { text-align: left; vertical-align: top; padding: .4rem .55rem; border-bottom: 1px solid #e5e5e5; }
+th { font-size: .85rem; color: #555; font-weight: 600; }
+td.points { white-space: nowrap; text-align: right; }
+td.mark { width: 1.5rem; font-weight: 700; }
+tr.passed td.mark { color: #1a7f37; }
+tr.failed td.mark { color: #c62828; }
+tr.failed td.reason { color: #8a1c1c; }
+.hidden-tag { font-size: .75rem; color: #666; border: 1px solid #bbb; border-radius: .6rem; padding: 0 .4rem; }
+tr.figures td { border-bottom: 1px solid #e5e5e5; padding-top: 0; }
+details summary { cursor: pointer; color: #0b57d0; font-size: .9rem; margin: .2rem 0 .4rem; }
+.figure-list { display: flex; flex-wrap: wrap; gap: .75rem; }
+figure.feedback-figure { margin: 0; background: #fff; border: 1px solid #e0e0e0; padding: .35rem; max-width: 100%; }
+figure.feedback-figure img { display: block; max-width: 100%; height: auto; }
+figcaption { font-size: .8rem; color: #555; max-width: 26rem; margin-top: .25rem; }
+code { font-size: .85em; background: #eee; padding: 0 .2rem; border-radius: .2rem; }
+"""
+
+
+def _figures_row(test):
+    shown = test.get("figures") or []
+    if not shown:
+        return ""
+    count = f"{len(shown)} figure{'s' if len(shown) > 1 else ''}"
+    inner = "".join(figures.figure_html(f) for f in shown)
+    return (f'<tr class="figures"><td></td><td colspan="3"><details{"" if test["passed"] else " open"}>'
+            f"<summary>Your curve beside the reference ({count})</summary>"
+            f'<div class="figure-list">{inner}</div></details></td></tr>')
+
+
+def feedback_html(student, results):
+    """Per-student feedback as one self-contained HTML page: scores, tests, reasons, figures.
+
+    Parameters
+    ----------
+    student : str
+    results : list of dict
+        As for :func:`gradescope_results`.
+
+    Returns
+    -------
+    str
+        The page: inline CSS, figures as inline PNG images (open under the
+        failed tests, folded under the passed ones), no scripts and no
+        external resources (its Content-Security-Policy forbids them).
+    """
+    e = html.escape
+    score, top = score_of([t for r in results for t in r["tests"]])
+    out = ['<!DOCTYPE html>', '<html lang="en">', "<head>", '<meta charset="utf-8">',
+           '<meta http-equiv="Content-Security-Policy" content="default-src \'none\'; img-src data:; '
+           'style-src \'unsafe-inline\'">',
+           '<meta name="viewport" content="width=device-width, initial-scale=1">',
+           f"<title>Feedback for {e(student)}</title>", f"<style>{_CSS}</style>", "</head>", "<body><main>",
+           f"<h1>Feedback for {e(student)}</h1>", f'<p class="total">Total: {_fmt(score)} / {_fmt(top)} points</p>']
+    for result in results:
+        s, m = score_of(result["tests"])
+        out.append(f'<section class="exercise"><h2>{e(result["exercise"])}: {_fmt(s)} / {_fmt(m)}</h2>')
+        if result.get("notebook"):
+            out.append(f'<p class="meta">Graded notebook: <code>{e(str(result["notebook"]))}</code></p>')
+        out.append('<table><colgroup><col class="mark"><col class="test"><col class="points"><col></colgroup>'
+                   "<thead><tr><th></th><th>test</th><th>points</th><th>what happened</th></tr></thead><tbody>")
+        for test in result["tests"]:
+            status = "passed" if test["passed"] else "failed"
+            hidden = ' <span class="hidden-tag">hidden</span>' if test["hidden"] else ""
+            got = test["points"] if test["passed"] else 0
+            out.append(f'<tr class="{status}"><td class="mark">{"✓" if test["passed"] else "✗"}</td>'
+                       f"<td>{e(test['name'])}{hidden}</td>"
+                       f'<td class="points">{_fmt(got)} / {_fmt(test["points"])}</td>'
+                       f'<td class="reason">{"" if test["passed"] else e(test["reason"])}</td></tr>')
+            out.append(_figures_row(test))
+        out.append("</tbody></table>")
+        notes = [e(n) for n in result.get("notes", [])]
+        if result.get("seed") is not None and any(t["hidden"] for t in result["tests"]):
+            notes.append(f"Hidden tests drew their random parameters with seed {e(str(result['seed']))}.")
+        if notes:
+            out.append('<ul class="notes">' + "".join(f"<li>{n}</li>" for n in notes) + "</ul>")
+        out.append("</section>")
+    out += ["</main></body>", "</html>"]
+    return "\n".join(line for line in out if line) + "\n"
 
 
 def write_gradebook(path, rows, exercises):

@@ -256,6 +256,15 @@ class Submission:
             return f"`{name}` raised SystemExit{where} (sys.exit() or exit() was called); a function must return its result"
         if kind == "KeyboardInterrupt":
             return f"`{name}` raised KeyboardInterrupt{where}; do not raise or simulate interrupts in your code"
+        if kind in ("OutputLimit", "FileTooLarge") or (kind == "OSError" and "File too large" in message):
+            size = f"{self.limits['file_mb']:g} MiB"  # the worker's RLIMIT_FSIZE, which holds its prints too
+            if kind == "OutputLimit":
+                return (f"`{name}`: your code printed more than {size} (the limit){where}; "
+                        "remove the prints inside loops")
+            if kind == "FileTooLarge":
+                return f"`{name}` wrote a file larger than {size} (the limit){where}; write less, or nothing at all"
+            return (f"`{name}` printed or wrote more than {size} (the limit){where}; remove the prints inside loops "
+                    "and large files")
         if kind == "MemoryError":
             return (f"`{name}` ran out of memory{where} (the limit is {self.limits['memory_mb']} MiB); "
                     "it allocates far more than the problem needs")

@@ -76,9 +76,26 @@ def _where(error):
 
 
 def _describe(error):
+    import errno
+
     if isinstance(error, sandbox.Timeout):
         kind = "Timeout"
         message = str(error)
+    elif isinstance(error, OSError) and error.errno == errno.EFBIG:
+        # a write past RLIMIT_FSIZE: the student's prints fill the capture file (fds 1 and 2), or a file of theirs
+        import resource
+
+        try:
+            limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+            full = limit != resource.RLIM_INFINITY and os.fstat(1).st_size >= limit - 4096
+        except (OSError, ValueError):
+            limit, full = resource.RLIM_INFINITY, False
+        size = f"{limit / 2**20:g} MiB" if limit != resource.RLIM_INFINITY else "the limit"
+        if full:
+            kind, message = "OutputLimit", (f"your code printed more than {size} (the limit); "
+                                            "remove the prints inside loops")
+        else:
+            kind, message = "FileTooLarge", f"your code wrote a file larger than {size} (the limit)"
     else:
         kind = type(error).__name__
         try:

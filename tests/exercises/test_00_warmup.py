@@ -2,8 +2,12 @@
 
 Public tests use fixed inputs a student can reason about; hidden tests draw
 random shapes and parameters from the grading seed (fixture ``rng``), so that
-hard-coded answers fail. Every expected value comes from the reference
-library, computed here in the grader, never in the student's process.
+hard-coded answers fail, and never print them (their messages give errors and
+indices, ``show_values=False``). Every expected value comes from the reference
+library, computed here in the grader, never in the student's process. A wrong
+result is compared with the typical mistakes (``hints``): a midpoint step, the
+slope taken at t + h, X returned unstepped, the damping's sign, the masses
+left out, a trajectory whose first record is not X0, ...
 """
 
 import numpy as np
@@ -35,6 +39,33 @@ def _random_state(rng, n, d):
     return rng.normal(size=(n, 2, d))
 
 
+def _euler_hints(f, X, t, h):
+    """Typical wrong answers for one Euler step: label -> the state they give."""
+    slope = f(X, t)
+    return {
+        "a midpoint step": midpoint(f, X, t, h),
+        "an Euler step with f evaluated at t + h instead of t (the slope of an Euler step is f(X, t), at the "
+        "start of the step)": X + h * f(X, t + h),
+        "X itself: the step X + h f(X, t) is missing": X,
+        "zeros, not the new state X + h f(X, t)": np.zeros_like(X),
+        "h f(X, t) alone, without X": h * slope,
+    }
+
+
+def _force_hints(v, m, g, d):
+    """Typical wrong total forces: label -> the forces they give."""
+    gravity, drag = np.asarray(m, dtype=float)[:, None] * g, -d * v
+    return {
+        "m g + d v: the damping has the wrong sign (the drag -d v opposes the velocity)": gravity - drag,
+        "g - d v, gravity without the masses (the weight of particle i is m_i g)": g + drag,
+        "m (g - d v): the drag multiplied by the mass (it is -d v, whatever the mass)": gravity + m[:, None] * drag,
+        "m g alone: the damping -d v is missing": gravity,
+        "-d v alone: gravity m g is missing": drag,
+        "the total force summed over all particles (sum(axis=0)); return one force per particle, shape (n, dim)":
+            (gravity + drag).sum(axis=0),
+    }
+
+
 # -- euler_step --------------------------------------------------------------------------------
 
 
@@ -44,7 +75,7 @@ def test_euler_step_circle(student):
     f, X = remote("circle"), np.array([1.0, 0.0])
     got = student.call("euler_step", f, X, 0.0, 0.1)
     expect_array(got, euler(f, X, 0.0, 0.1), "euler_step(f, X=[1, 0], t=0, h=0.1) on the circle field",
-                 hints={"a midpoint step": midpoint(f, X, 0.0, 0.1)})
+                 hints=_euler_hints(f, X, 0.0, 0.1))
 
 
 @pytest.mark.points(1)
@@ -54,7 +85,7 @@ def test_euler_step_oscillator(student):
     X = np.array([[[1.0], [0.5]]])
     got = student.call("euler_step", f, X, 0.0, 0.05)
     expect_array(got, euler(f, X, 0.0, 0.05), "euler_step(f, X, t=0, h=0.05) on the oscillator with omega = 2",
-                 hints={"a midpoint step": midpoint(f, X, 0.0, 0.05)})
+                 hints=_euler_hints(f, X, 0.0, 0.05))
 
 
 @pytest.mark.points(1)
@@ -64,9 +95,7 @@ def test_euler_step_leaves_X_unchanged(student):
     X = np.array([[[1.0], [0.0]], [[0.0], [1.0]]])
     got = student.call("euler_step", f, X, 0.0, 0.1, check_inputs=True)
     expect_array(got, euler(f, X, 0.0, 0.1), "euler_step(f, X of shape (2, 2, 1), t=0, h=0.1) on the oscillator "
-                 "with omega = 1", hints={"X itself: the step X + h f(X, t) is missing": X,
-                                          "zeros, not the new state X + h f(X, t)": np.zeros_like(X),
-                                          "h f(X, t) alone, without X": euler(f, X, 0.0, 0.1) - X})
+                 "with omega = 1", hints=_euler_hints(f, X, 0.0, 0.1))
     if student.calls_of(0) != 1:
         raise GradingFailure(f"euler_step evaluated f {student.calls_of(0)} times in one step; Euler's method "
                              "uses exactly one evaluation, f(X, t)")
@@ -82,8 +111,8 @@ def test_euler_step_random(student, rng):
         f = remote("forced_oscillator", omega=omega, amplitude=rng.uniform(0.5, 2.0), frequency=omega + 1.3)
         X = _random_state(rng, n, d)
         expect_array(student.call("euler_step", f, X, t, h), euler(f, X, t, h),
-                     f"euler_step(f, X of shape {X.shape}, t={t:.3g}, h={h:.3g}) on a driven oscillator",
-                     hints={"a midpoint step": midpoint(f, X, t, h)})
+                     f"euler_step(f, X of shape {X.shape}, t, h) on a driven oscillator (random t, h and X)",
+                     hints=_euler_hints(f, X, t, h), show_values=False)
 
 
 # -- total_force -------------------------------------------------------------------------------
@@ -96,7 +125,8 @@ def test_total_force_three_particles(student):
     v = np.array([[1.0, 0.0], [0.0, -2.0], [0.5, 0.5]])
     m, g, d = np.array([1.0, 2.0, 0.5]), np.array([0.0, -9.81]), 0.3
     got = student.call("total_force", x, v, m, g, d)
-    expect_array(got, _reference_force(x, v, m, g, d), "total_force(x, v, m=[1, 2, 0.5], g=[0, -9.81], d=0.3)")
+    expect_array(got, _reference_force(x, v, m, g, d), "total_force(x, v, m=[1, 2, 0.5], g=[0, -9.81], d=0.3)",
+                 hints=_force_hints(v, m, g, d))
 
 
 @pytest.mark.points(2)
@@ -108,7 +138,8 @@ def test_total_force_random(student, rng):
         x, v = rng.normal(size=(n, dim)), rng.normal(size=(n, dim))
         m, g, d = rng.uniform(0.1, 3.0, n), rng.normal(size=dim), rng.uniform(0.0, 2.0)
         got = student.call("total_force", x, v, m, g, d, check_inputs=True)
-        expect_array(got, _reference_force(x, v, m, g, d), f"total_force for {n} random particles in {dim}D")
+        expect_array(got, _reference_force(x, v, m, g, d), f"total_force for {n} random particles in {dim}D",
+                     hints=_force_hints(v, m, g, d), show_values=False)
 
 
 # -- run ---------------------------------------------------------------------------------------
@@ -118,13 +149,53 @@ def _reference_run(f, X0, t0, h, n):
     return particles.integrate(f, X0, t0, t0 + n * h, h, method="euler")
 
 
-def _check_run(got, f, X0, t0, h, n, call):
+def _loop(f, X0, t0, h, n, time_shift=0.0, restart=False):
+    """A wrong Euler loop: each step given t_k + `time_shift`, or each step taken from X0 (`restart`)."""
+    X = [np.asarray(X0, dtype=float)]
+    for k in range(n):
+        X.append(euler(f, X0 if restart else X[-1], t0 + k * h + time_shift, h))
+    return np.array(X)
+
+
+def _first_record(X0):
+    """A pattern: the trajectory's first record is not X0."""
+    def wrong(X):
+        return X.ndim >= 1 and len(X) > 0 and X[0].shape == np.shape(X0) and not np.allclose(X[0], X0, rtol=1e-9)
+    return wrong
+
+
+def _run_hints(f, X0, t0, h, n):
+    """Typical wrong trajectories of run: label -> the states (or a pattern)."""
+    longer = _reference_run(f, X0, t0, h, n + 1)[1]
+    return {
+        "the states one step ahead, X[k] after k + 1 steps: your first record is not X0 (the trajectory must start "
+        "with the initial state, X[0] = X0)": longer[1:],
+        "the states of a loop that passes t + h to each step instead of t[k] (the step from t[k] is "
+        "euler_step(f, X[k], t[k], h))": _loop(f, X0, t0, h, n, time_shift=h),
+        "one step from X0 in every record: each step must start from the previous state X[k], not from X0":
+            _loop(f, X0, t0, h, n, restart=True),
+        "X0 in every record: the state never advances (look at the loop, and at euler_step)":
+            np.broadcast_to(np.asarray(X0, dtype=float), longer[1:].shape),
+        "your first record is not X0: the trajectory must start with the initial state (X[0] = X0)": _first_record(X0),
+    }
+
+
+def _check_run(got, f, X0, t0, h, n, call, hidden=False):
     if not isinstance(got, tuple) or len(got) != 2:
         kind = describe_value(got) if not isinstance(got, tuple) else f"a tuple of {len(got)} values"
         raise GradingFailure(f"{call} returned {kind}, expected the tuple (t, X)")
     t_ref, X_ref = _reference_run(f, X0, t0, h, n)
-    expect_array(got[0], t_ref, f"the times t of {call}", rtol=1e-9)
-    expect_array(got[1], X_ref, f"the states X of {call}", rtol=1e-9)
+    records = "n_steps steps make n_steps + 1 records, t0 and X0 included"
+    expect_array(got[0], t_ref, f"the times t of {call}", rtol=1e-9, show_values=not hidden, hints={
+        f"the times without the last one: {records}": t_ref[:-1],
+        f"the times after each step, without t0: {records}": t_ref[1:],
+        "times that start at t0 + h instead of t0": t_ref + h,
+        "times that start at 0 instead of t0": t_ref - t0,
+    })
+    expect_array(got[1], X_ref, f"the states X of {call}", rtol=1e-9, show_values=not hidden,
+                 hints=dict({f"the states without the last one: {records}": X_ref[:-1],
+                             f"the states after each step, without X0: {records}": X_ref[1:]},
+                            **_run_hints(f, X0, t0, h, n)))
 
 
 @pytest.mark.points(1)
@@ -144,4 +215,5 @@ def test_run_random(student, rng):
     f = remote("forced_oscillator", omega=omega, amplitude=1.0, frequency=omega + 0.7)
     X0, t0, h = _random_state(rng, n, d), rng.uniform(0.0, 5.0), rng.uniform(0.005, 0.05)
     _check_run(student.call("run", f, X0, t0, h, steps, check_inputs=True), f, X0, t0, h, steps,
-               f"run(f, X0 of shape {X0.shape}, t0={t0:.3g}, h={h:.3g}, n_steps={steps})")
+               f"run(f, X0 of shape {X0.shape}, t0, h, n_steps) on a driven oscillator (random X0, t0, h and "
+               "n_steps)", hidden=True)

@@ -17,7 +17,7 @@ import math
 import numpy as np
 import pytest
 
-from particles.course.expect import expect_array, expect_float, expect_order
+from particles.course.expect import LN10, expect_array, expect_float, expect_order
 from particles.course.registry import remote
 from particles.course.runner import GradingFailure, describe_value
 from particles.integrators import euler, midpoint, rk4, trapezoid
@@ -93,12 +93,61 @@ def _wrong_steps(method, f, X, t, h):
     return wrong
 
 
-def _check_step(student, method, f, X, t, h, where, check_inputs=False, count=False):
-    """One step of the student's stepper against the reference, with hints for typical slips."""
+# the stages of each method, and their weights in X_new = X + h sum_i b_i k_i
+_STAGE_NAMES = {"euler": ["f(X, t)"], "midpoint": ["f_0", "f_m"], "trapezoid": ["f_0", "f_1"],
+                "rk4": ["k1", "k2", "k3", "k4"]}
+_WEIGHTS = {"euler": [1.0], "midpoint": [0.0, 1.0], "trapezoid": [0.5, 0.5], "rk4": [1 / 6, 1 / 3, 1 / 3, 1 / 6]}
+_WEIGHT_TEXT = {"euler": "1", "midpoint": "(0, 1): all of the midpoint slope f_m", "trapezoid": "(1/2, 1/2)",
+                "rk4": "(1, 2, 2, 1)/6"}
+
+
+def _stages(method, f, X, t, h):
+    """The reference's slopes of one step of `method` (the k_i of its Butcher tableau)."""
+    f0 = f(X, t)
+    if method == "euler":
+        return [f0]
+    if method == "midpoint":
+        return [f0, f(X + 0.5 * h * f0, t + 0.5 * h)]
+    if method == "trapezoid":
+        return [f0, f(X + h * f0, t + h)]
+    k2 = f(X + 0.5 * h * f0, t + 0.5 * h)
+    k3 = f(X + 0.5 * h * k2, t + 0.5 * h)
+    return [f0, k2, k3, f(X + h * k3, t + h)]
+
+
+def _weights_diagnosis(got, method, f, X, t, h):
+    """'your step is X + h (0.333 f_0 + 0.667 f_1) ...' when the result combines the right slopes with wrong weights."""
+    stages = _stages(method, f, X, t, h)
+    if not isinstance(got, np.ndarray) or got.shape != np.shape(X) or got.dtype.kind != "f" \
+            or np.size(X) < len(stages) + 2 or not np.all(np.isfinite(got)):
+        return ""
+    A = h * np.stack([np.ravel(k) for k in stages], axis=1)
+    y = np.ravel(got - X)
+    w, *_ = np.linalg.lstsq(A, y, rcond=None)
+    if np.linalg.norm(A @ w - y) > 1e-9 * (np.linalg.norm(y) + 1e-12) or np.allclose(w, _WEIGHTS[method], atol=1e-6):
+        return ""
+    terms = " + ".join(f"{wi:.3g} {name}" for wi, name in zip(w, _STAGE_NAMES[method]))
+    return (f"; your step is X + h ({terms}): the right slopes with the wrong weights (the {method} step weights them "
+            f"{_WEIGHT_TEXT[method]})")
+
+
+def _check_step(student, method, f, X, t, h, where, check_inputs=False, count=False, hidden=False):
+    """One step of the student's stepper against the reference, with hints for typical slips.
+
+    A hidden test (`hidden`) keeps its random t and h out of the message.
+    """
     name, reference, _, evaluations = STEPS[method]
-    call = f"{name}(f, X of shape {X.shape}, t={t:.4g}, h={h:.4g}) on {where}"
+    call = (f"{name}(f, X of shape {X.shape}, t, h) on {where} (random X, t and h)" if hidden else
+            f"{name}(f, X of shape {X.shape}, t={t:.4g}, h={h:.4g}) on {where}")
     got = student.call(name, f, X, t, h, check_inputs=check_inputs)
-    expect_array(got, reference(f, X, t, h), call, hints=_wrong_steps(method, f, X, t, h))
+    try:
+        expect_array(got, reference(f, X, t, h), call, hints=_wrong_steps(method, f, X, t, h),
+                     show_values=not hidden)
+    except GradingFailure as failure:
+        message = str(failure)
+        if "; your " not in message:
+            message += _weights_diagnosis(got, method, f, X, t, h)
+        raise GradingFailure(message) from None
     if count and student.calls_of(0) != evaluations:
         raise GradingFailure(f"{name} evaluated f {student.calls_of(0)} times in one step; the {method} method "
                              f"uses exactly {evaluations}")
@@ -144,48 +193,104 @@ _LABELS = {"circle": "the circle field", "harmonic_oscillator": "the harmonic os
            "projectile_drag": "the projectile with drag", "forced_oscillator": "the driven oscillator"}
 
 
-def _diagnosis(student, method):
-    """Why a measured order is off: the step itself, or the study around it."""
+def _clause(failure):
+    """The diagnosis a failure message ends with ("your result matches ...", "your step is ..."), or ""."""
+    text = str(failure)
+    if "; your result matches " in text:
+        return "your result matches " + text.split("; your result matches ", 1)[1]
+    if "; your " in text:
+        return "your " + text.rsplit("; your ", 1)[1]
+    return ""
+
+
+def _diagnosis(student, method, only_step=False):
+    """Why a measured order is off: the step itself, the errors of the study, or the slope fitted to them.
+
+    With `only_step` (the errors are known to be wrong), only whether the step is.
+    """
     name, reference, _, _ = STEPS[method]
     f = remote("forced_oscillator", omega=1.7, amplitude=1.3, frequency=2.9)
     X = np.array([[[0.8, -0.3], [0.4, 1.1]], [[-1.2, 0.5], [0.2, -0.7]]])
     try:
         got = student.call(name, f, X, 0.35, 0.05, check_inputs=True)
-        expect_array(got, reference(f, X, 0.35, 0.05), name)
+        try:
+            expect_array(got, reference(f, X, 0.35, 0.05), name, hints=_wrong_steps(method, f, X, 0.35, 0.05))
+        except GradingFailure as failure:
+            clause = _clause(failure) or _weights_diagnosis(got, method, f, X, 0.35, 0.05)[2:]
+            raise GradingFailure(f"; one step of your {name} does not match the reference"
+                                 + (f" ({clause})" if clause else "") + f", see the tests of {name}") from None
     except GradingFailure as failure:
         if "in place" in str(failure):
             return f"; your {name} modifies X in place, which can overwrite X0 between the runs of the study"
-        return f"; one step of your {name} does not match the reference, see the tests of {name}"
-    return (f"; your {name} matches the reference on a single step, so look at convergence_errors "
-            "(the loop and the error) and observed_order (the slope)")
+        return str(failure) if str(failure).startswith("; one step") else \
+            f"; one step of your {name} does not match the reference, see the tests of {name}"
+    if only_step:
+        return f"; your {name} matches the reference on a single step, so look at the loop and the error"
+    # the step is right: the errors of the study, then the slope
+    driven = {"omega": 1.3, "amplitude": 0.8, "frequency": 2.1, "x0": 0.5, "v0": -0.2, "t1": 2.0}  # depends on t
+    field, exact = remote("forced_oscillator", **driven), remote("forced_oscillator", attr="exact", **driven)
+    problem = field.problem
+    try:
+        got = student.call("convergence_errors", method, field, problem.X0, problem.t0, problem.t1, exact, [10, 20])
+        errors = np.asarray(got[1], dtype=float) if isinstance(got, (tuple, list)) and len(got) == 2 else got
+        expect_array(errors, [global_error(problem, method, 10), global_error(problem, method, 20)],
+                     "convergence_errors", rtol=1e-6, atol=1e-13,
+                     hints=_error_hints(method, field, exact, problem.X0, problem.t0, problem.t1, [10, 20]))
+    except (GradingFailure, TypeError, ValueError) as failure:
+        clause = _clause(failure)
+        return ("; your steps are right, but your convergence_errors does not give the reference errors"
+                + (f" ({clause})" if clause else "") + ", see the tests of convergence_errors")
+    h, e = np.array([0.2, 0.1, 0.05, 0.025]), np.array([0.031, 0.0088, 0.0021, 0.00052])
+    try:
+        _check_slope(student, h, e, "observed_order")
+    except GradingFailure as failure:
+        clause = _clause(failure)
+        return ("; your steps and errors are right, but your observed_order does not give the least-squares slope"
+                + (f" ({clause})" if clause else "") + ", see the tests of observed_order")
+    return (f"; your {name}, convergence_errors and observed_order match the reference on small cases, so look at "
+            "how measured_order combines them")
 
 
-def _judge_order(student, method, name, params, n_steps=None):
+def _log_diagnosis(got, reference):
+    """'; ... log10 and ln mixed ...' when `got` is the reference slope divided or multiplied by ln(10)."""
+    if reference != 0 and abs(got * LN10 / reference - 1) <= 0.005:
+        return ("; your order is the measured slope divided by ln(10) = 2.303: log10 on the errors' axis and ln on "
+                "the steps' axis (or the other way round) in observed_order; use the same logarithm on both axes")
+    if reference != 0 and abs(got / LN10 / reference - 1) <= 0.005:
+        return ("; your order is the measured slope times ln(10) = 2.303: ln on the errors' axis and log10 on the "
+                "steps' axis in observed_order; use the same logarithm on both axes")
+    return ""
+
+
+def _judge_order(student, method, name, params, n_steps=None, hidden=False):
     """measured_order(method, ...) of the student on problem `name`, judged against what it should measure.
 
     With the default step counts (asymptotic range) the value must be within ORDER_TOLERANCE of the
     method's order; with any step counts it must be within SLOPE_TOLERANCE of the slope the reference
-    library measures for the same problem and step counts, so a hard-coded order does not pass.
+    library measures for the same problem and step counts, so a hard-coded order does not pass. A hidden
+    test (`hidden`) keeps its random end time and step counts out of the message.
     """
     f, exact = remote(name, **params), remote(name, attr="exact", **params)
     problem = f.problem
     asymptotic = n_steps is None
     n_steps = N_STEPS[method] if asymptotic else list(n_steps)
     got = student.call("measured_order", method, f, problem.X0, problem.t0, problem.t1, exact, n_steps)
-    call = (f"measured_order('{method}', f, X0, t0={problem.t0:g}, t1={problem.t1:.3g}, exact, "
-            f"n_steps={n_steps}) on {_LABELS[name]}")
+    call = (f"measured_order('{method}', f, X0, t0, t1, exact, n_steps) on {_LABELS[name]} (random problem and "
+            "step counts)" if hidden else f"measured_order('{method}', f, X0, t0={problem.t0:g}, t1={problem.t1:.3g}, "
+            f"exact, n_steps={n_steps}) on {_LABELS[name]}")
     if isinstance(got, np.ndarray) and got.shape == ():
         got = got[()]
     if isinstance(got, (bool, np.bool_)) or not isinstance(got, (int, float, np.integer, np.floating)):
         raise GradingFailure(f"{call} returned {describe_value(got)}, expected a number")
     got = float(got)
     nominal = STEPS[method][2]
+    reference = _reference_order(problem, method, n_steps)
     if asymptotic:
         try:
             expect_order(got, nominal, f"your {method} step ({call})", tolerance=ORDER_TOLERANCE)
         except GradingFailure as failure:
-            raise GradingFailure(str(failure) + _diagnosis(student, method)) from None
-    reference = _reference_order(problem, method, n_steps)
+            raise GradingFailure(str(failure) + (_log_diagnosis(got, reference) or _diagnosis(student, method))) \
+                from None
     if not abs(got - reference) <= SLOPE_TOLERANCE:
         message = (f"{call} returned {got:.4g}, but the global errors of the {method} method at these step "
                    f"counts fall with a least-squares slope of {reference:.4g} (measured by the reference, "
@@ -194,7 +299,7 @@ def _judge_order(student, method, name, params, n_steps=None):
             message += (f"; {got:g} is the method's nominal order, not a measurement: return the slope of "
                         "your own errors, whatever it comes out as")
         else:
-            message += _diagnosis(student, method)
+            message += _log_diagnosis(got, reference) or _diagnosis(student, method)
         raise GradingFailure(message)
 
 
@@ -206,12 +311,17 @@ def _reference_final(step, f, X0, t0, t1, N):
     return X
 
 
-def _check_errors(student, method, name, params, n_steps, check_inputs=False):
-    """convergence_errors(method, ...) of the student against the reference global errors."""
+def _check_errors(student, method, name, params, n_steps, check_inputs=False, hidden=False):
+    """convergence_errors(method, ...) of the student against the reference global errors.
+
+    A hidden test (`hidden`) keeps its random problem and step counts out of the message.
+    """
     f, exact = remote(name, **params), remote(name, attr="exact", **params)
     problem = f.problem
     X0, t0, t1 = problem.X0, problem.t0, problem.t1
-    call = (f"convergence_errors('{method}', f, X0 of shape {X0.shape}, t0={t0:g}, t1={t1:.3g}, exact, "
+    call = (f"convergence_errors('{method}', f, X0 of shape {X0.shape}, t0, t1, exact, n_steps) on {_LABELS[name]} "
+            "(random problem and step counts)" if hidden else
+            f"convergence_errors('{method}', f, X0 of shape {X0.shape}, t0={t0:g}, t1={t1:.3g}, exact, "
             f"n_steps={list(n_steps)}) on {_LABELS[name]}")
     got = student.call("convergence_errors", method, f, X0, t0, t1, exact, list(n_steps), check_inputs=check_inputs)
     if not isinstance(got, (tuple, list)) or len(got) != 2:
@@ -219,24 +329,42 @@ def _check_errors(student, method, name, params, n_steps, check_inputs=False):
         raise GradingFailure(f"{call} returned {kind}, expected the tuple (h, errors)")
     n = np.asarray(n_steps, dtype=float)
     expect_array(np.asarray(got[0]) if isinstance(got[0], list) else got[0], (t1 - t0) / n,
-                 f"the step sizes h of {call}", rtol=1e-12)
+                 f"the step sizes h of {call}", rtol=1e-12, show_values=not hidden,
+                 hints={"the numbers of steps N instead of the step sizes h = (t1 - t0) / N": n,
+                        "t1 / N: the step sizes without t0 (h = (t1 - t0) / N)": t1 / n})
     expected = np.array([global_error(problem, method, int(k)) for k in n_steps])
+    errors = np.asarray(got[1]) if isinstance(got[1], list) else got[1]
+    try:
+        expect_array(errors, expected, f"the errors of {call}", rtol=1e-6, atol=1e-13,
+                     hints=_error_hints(method, f, exact, X0, t0, t1, n_steps), show_values=not hidden)
+    except GradingFailure as failure:
+        extra = _diagnosis(student, method, only_step=True)
+        if "; your result matches" in str(failure) and "matches the reference on a single step" in extra:
+            extra = ""  # the hint says what is wrong, and the step is right
+        raise GradingFailure(str(failure) + extra) from None
+
+
+def _error_hints(method, f, exact, X0, t0, t1, n_steps):
+    """Typical wrong global errors of convergence_errors: label -> the errors they give."""
     step, X1 = STEPS[method][1], exact(t1)
     finals = {k: _reference_final(step, f, X0, t0, t1, int(k)) for k in n_steps}
     more = {k: step(f, finals[k], t1, (t1 - t0) / k) for k in n_steps}
-    hints = {
+    def late_step(f_, X_, t_, h_):
+        return step(f_, X_, t_ + h_, h_)
+
+    late = {k: _reference_final(late_step, f, X0, t0, t1, int(k)) for k in n_steps}
+    return {
         "the Euclidean norm of X_N - X(t1) instead of its largest component":
             [np.linalg.norm((finals[k] - X1).ravel()) for k in n_steps],
         "the largest component of X_N - X(t1) with its sign, not its absolute value":
             [np.max(finals[k] - X1) for k in n_steps],
         "the errors after N + 1 steps instead of N": [np.max(np.abs(more[k] - exact(t1 + (t1 - t0) / k)))
                                                       for k in n_steps],
+        "the errors of a loop that passes t + h to each step instead of t0 + k h (the step from t_k starts at t_k)":
+            [np.max(np.abs(late[k] - X1)) for k in n_steps],
+        "the errors relative to the largest component of X(t1), not the absolute errors":
+            [np.max(np.abs(finals[k] - X1)) / np.max(np.abs(X1)) for k in n_steps],
     }
-    errors = np.asarray(got[1]) if isinstance(got[1], list) else got[1]
-    try:
-        expect_array(errors, expected, f"the errors of {call}", rtol=1e-6, atol=1e-13, hints=hints)
-    except GradingFailure as failure:
-        raise GradingFailure(str(failure) + _diagnosis(student, method)) from None
 
 
 def _slope_hints(h, e):
@@ -255,21 +383,45 @@ def _slope_hints(h, e):
     }
 
 
-def _check_slope(student, h, e, call, check_inputs=False):
+def _check_slope(student, h, e, call, check_inputs=False, hidden=False):
+    """observed_order(h, e) of the student against the reference least-squares slope, with typical wrong slopes."""
     got = student.call("observed_order", h, e, check_inputs=check_inputs)
-    expected = fit_order(h, e)
+    expect_float(got, fit_order(h, e), call, rtol=1e-8, atol=1e-10, hints=_slope_hints(h, e), show_values=not hidden)
+
+
+# -- figures for the feedback ------------------------------------------------------------------
+
+
+def _figure_errors(feedback, student, method, name, params, n_steps, hidden=False):
+    """Attach the student's global errors against h beside the reference's, before the test judges them.
+
+    The student's errors come from their convergence_errors; a hidden test plots h / h_0 and errors relative
+    to the reference's at h_0, so that its random problem does not show.
+    """
+    f, exact = remote(name, **params), remote(name, attr="exact", **params)
+    problem = f.problem
+    h = (problem.t1 - problem.t0) / np.asarray(n_steps, dtype=float)
+    reference = np.array([global_error(problem, method, int(k)) for k in n_steps])
     try:
-        expect_float(got, expected, call, rtol=1e-8, atol=1e-10)
-    except GradingFailure as failure:
-        message = str(failure)
-        if isinstance(got, np.ndarray) and got.shape == ():
-            got = got[()]
-        if isinstance(got, (int, float, np.integer, np.floating)) and not isinstance(got, (bool, np.bool_)):
-            for label, wrong in _slope_hints(h, e).items():
-                if abs(float(got) - wrong) <= 1e-8 * abs(wrong) + 1e-10:
-                    message += f"; your result matches {label}"
-                    break
-        raise GradingFailure(message) from None
+        got = student.call("convergence_errors", method, f, problem.X0, problem.t0, problem.t1, exact, list(n_steps))
+        yours = np.asarray(got[1], dtype=float) if isinstance(got, (tuple, list)) and len(got) == 2 else None
+    except (GradingFailure, TypeError, ValueError):
+        yours = None
+    usable = yours is not None and yours.shape == h.shape and bool(np.all(np.isfinite(yours)) and np.all(yours > 0))
+    slope = f" (slope {fit_order(h, yours):.2f})" if usable else ""
+    yours = yours if yours is not None and yours.ndim == 1 else None
+    x, scale = (h / h[0], reference[0]) if hidden else (h, 1.0)
+    series = [{"label": f"reference (slope {fit_order(h, reference):.2f})", "x": x, "y": reference / scale}]
+    if yours is not None:
+        series.insert(0, {"label": f"yours{slope}", "x": x[:len(yours)], "y": yours / scale})
+    where = "a random problem" if hidden else _LABELS[name]
+    feedback.curve(f"Global error of your {method} steps on {where}",
+                   "step h / coarsest step" if hidden else "step h (s)",
+                   "error / reference error at the coarsest step" if hidden else "largest error at t1",
+                   series, loglog=True,
+                   caption=f"The slope of each line is the order measured from it; {method} has order "
+                           f"{STEPS[method][2]}." + ("" if yours is not None else
+                                                     " Your convergence_errors gave no errors to draw."))
 
 
 # -- the steppers ------------------------------------------------------------------------------
@@ -312,26 +464,29 @@ def test_step_random(student, rng, method):
             f = remote("forced_oscillator", omega=omega, amplitude=rng.uniform(0.5, 2.0),
                        frequency=omega + rng.uniform(0.5, 2.0))
             X = rng.normal(size=(n, 2, d) if rng.random() < 0.5 else (n, 2))
-        _check_step(student, method, f, X, t, h, _LABELS[name], check_inputs=True)
+        _check_step(student, method, f, X, t, h, _LABELS[name], check_inputs=True, hidden=True)
 
 
 # -- the global errors -------------------------------------------------------------------------
 
 
 @pytest.mark.points(1)
-def test_convergence_errors_circle(student):
+def test_convergence_errors_circle(student, feedback):
     """convergence_errors gives h = 5/N and Euler's max-norm errors at t1 = 5 s on the circle field."""
+    _figure_errors(feedback, student, "euler", "circle", {"X0": [1.0, 0.0], "t1": 5.0}, [20, 40, 80])
     _check_errors(student, "euler", "circle", {"X0": [1.0, 0.0], "t1": 5.0}, [20, 40, 80], check_inputs=True)
 
 
 @pytest.mark.points(2)
 @pytest.mark.hidden
-def test_convergence_errors_random(student, rng):
+def test_convergence_errors_random(student, rng, feedback):
     """convergence_errors matches the reference global errors on random problems, methods and step counts."""
     for name in ["forced_oscillator", "projectile_drag", str(rng.choice(["circle", "harmonic_oscillator"]))]:
         method = str(rng.choice(["euler", "midpoint", "trapezoid"]))
         n_steps = sorted(int(k) for k in rng.choice(np.arange(5, 150), size=3, replace=False))
-        _check_errors(student, method, name, _random_problem(rng, name), n_steps, check_inputs=True)
+        params = _random_problem(rng, name)
+        _figure_errors(feedback, student, method, name, params, n_steps, hidden=True)
+        _check_errors(student, method, name, params, n_steps, check_inputs=True, hidden=True)
 
 
 # -- the slope ---------------------------------------------------------------------------------
@@ -362,8 +517,8 @@ def test_observed_order_random(student, rng):
         h = rng.uniform(0.05, 0.5) * np.cumprod(np.r_[1.0, rng.uniform(0.3, 0.8, m - 1)])
         p, C = rng.uniform(0.5, 4.5), math.exp(rng.uniform(-3.0, 3.0))
         e = C * h**p * np.exp(rng.normal(0.0, 0.15, m))
-        _check_slope(student, h, e, f"observed_order on {m} random step sizes with errors ~ C h^{p:.2f} (with noise)",
-                     check_inputs=True)
+        _check_slope(student, h, e, f"observed_order on {m} random step sizes with errors ~ C h^p (random C and p, "
+                     "with noise)", check_inputs=True, hidden=True)
 
 
 # -- the measured orders -----------------------------------------------------------------------
@@ -371,18 +526,21 @@ def test_observed_order_random(student, rng):
 
 @pytest.mark.points(1)
 @pytest.mark.parametrize("method", METHODS)
-def test_measured_order_circle(student, method):
+def test_measured_order_circle(student, method, feedback):
     """measured_order finds the order of each stepper (1, 2, 2, 4) on the circle field up to t1 = 5 s."""
+    _figure_errors(feedback, student, method, "circle", {"X0": [1.0, 0.0], "t1": 5.0}, N_STEPS[method])
     _judge_order(student, method, "circle", {"X0": [1.0, 0.0], "t1": 5.0})
 
 
 @pytest.mark.points(2)
 @pytest.mark.hidden
 @pytest.mark.parametrize("method", METHODS)
-def test_measured_order_random(student, rng, method):
+def test_measured_order_random(student, rng, method, feedback):
     """measured_order finds each stepper's order on a random driven oscillator and one other random problem."""
     for name in ["forced_oscillator", str(rng.choice(["circle", "harmonic_oscillator", "projectile_drag"]))]:
-        _judge_order(student, method, name, _clean_problem(rng, name, method))
+        params = _clean_problem(rng, name, method)
+        _figure_errors(feedback, student, method, name, params, N_STEPS[method], hidden=True)
+        _judge_order(student, method, name, params, hidden=True)
 
 
 def _coarse_problem(rng, method):
@@ -409,4 +567,4 @@ def _coarse_problem(rng, method):
 def test_measured_order_coarse_steps(student, rng, method):
     """measured_order reports the slope it measures, also at coarse steps where it is not the nominal order."""
     name, params, n_steps = _coarse_problem(rng, method)
-    _judge_order(student, method, name, params, n_steps)
+    _judge_order(student, method, name, params, n_steps, hidden=True)

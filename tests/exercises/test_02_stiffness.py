@@ -50,11 +50,12 @@ def _number(value, call):
     return float(value)
 
 
-def _check_limit(got, h_max, unstable, omega, call, test, symbol="omega h", advice=""):
+def _check_limit(got, h_max, unstable, omega, call, test, symbol="omega h", advice="", theory=None):
     """Check a measured step limit: stable in the blow-up test `unstable`, at most LIMIT_BELOW below its limit h_max.
 
     h_max is the largest step that test lets pass. Messages are in units of `symbol` (omega h, omega_max h);
-    `test` names the blow-up test ("the library's 200-step blow-up test"), `advice` ends a message.
+    `test` names the blow-up test ("the library's 200-step blow-up test"), `advice` ends a message. A step
+    equal to the theoretical limit `theory` (s), or 0.9 times the limit, is named as such.
     """
     h = _number(got, call)
     if h == 0.0:
@@ -72,6 +73,12 @@ def _check_limit(got, h_max, unstable, omega, call, test, symbol="omega h", advi
                              f"lets steps up to {symbol} = {omega * h_max:.4g} pass: return the largest step known "
                              f"to be stable, the lower end of the bisection's bracket{scale}")
     if not abs(ratio - 1) <= LIMIT_BELOW:
+        if not scale and theory is not None and abs(h / theory - 1) <= 2e-3:
+            scale = (f"; your step is the theoretical limit {symbol} = {omega * theory:.4g}, not a measurement: run "
+                     "your blow-up test with the `steps` you are given and bisect")
+        elif not scale and 0.88 <= ratio <= 0.905:
+            scale = ("; your step is 0.9 times the limit: return h, the result of the bisection, not the 0.9 h that "
+                     "the longer test checks")
         raise GradingFailure(f"{call} returned {symbol} = {omega * h:.4g}; {test} lets steps up to {symbol} = "
                              f"{omega * h_max:.4g} pass, and the limit must lie within {100 * LIMIT_BELOW:g}% "
                              f"below that{scale or advice}")
@@ -129,11 +136,12 @@ def _chain_limit(unstable, theory, rtol=1e-4):
     return lo
 
 
-def _blows_up(student, method, k, m, h, steps):
+def _blows_up(student, method, k, m, h, steps, hidden=False):
     got = student.call("blows_up", method, k, m, h, steps, timeout=10)
     if not isinstance(got, (bool, np.bool_)):
-        raise GradingFailure(f"blows_up({method!r}, k={k:.3g}, m={m:.3g}, h={h:.3g}, steps={steps}) returned "
-                             f"{describe_value(got)}, expected True or False")
+        call = (f"blows_up({method!r}, k, m, h, steps={steps}) on a random spring" if hidden else
+                f"blows_up({method!r}, k={k:.3g}, m={m:.3g}, h={h:.3g}, steps={steps})")
+        raise GradingFailure(f"{call} returned {describe_value(got)}, expected True or False")
     return bool(got)
 
 
@@ -164,10 +172,12 @@ def test_blows_up_random(student, rng):
         for factor in (rng.uniform(0.5, 0.9), rng.uniform(1.1, 1.5)):
             h = factor * STABLE[method] / omega
             expected = stability.blows_up(method, k, m, h, steps=200)
-            got = _blows_up(student, method, k, m, h, 200)
+            got = _blows_up(student, method, k, m, h, 200, hidden=True)
             if got != expected:
-                raise GradingFailure(f"blows_up({method!r}, k={k:.4g}, m={m:.4g}, h={h:.4g}) (omega h = {omega * h:.3g}) "
-                                     f"returned {got}, expected {expected}")
+                raise GradingFailure(f"blows_up({method!r}, k, m, h) on a random spring at omega h = {omega * h:.3g} "
+                                     f"returned {got}, expected {expected}: the amplitude "
+                                     f"{'grows past 1000 times its start' if expected else 'stays bounded'} within "
+                                     "200 steps")
     # Just above RK4's limit the amplitude grows so slowly that a 20-step test does not see it blow up:
     # the library's test says stable, a comparison of omega h with the theoretical 2.83 says unstable.
     k, m = 10 ** rng.uniform(-1, 6), 10 ** rng.uniform(-2, 2)
@@ -175,10 +185,10 @@ def test_blows_up_random(student, rng):
     h_short = stability.max_stable_step("rk4", k, m, steps=20, rtol=1e-3)
     h = theory * rng.uniform(1.01, 0.99 * h_short / theory)
     expected = stability.blows_up("rk4", k, m, h, steps=20)
-    got = _blows_up(student, "rk4", k, m, h, 20)
+    got = _blows_up(student, "rk4", k, m, h, 20, hidden=True)
     if got != expected:
-        raise GradingFailure(f"blows_up('rk4', k={k:.4g}, m={m:.4g}, h={h:.4g}, steps=20) (omega h = {omega * h:.4g}, "
-                             f"just above the theoretical 2.83) returned {got}, expected {expected}: so close to the "
+        raise GradingFailure(f"blows_up('rk4', k, m, h, steps=20) on a random spring at omega h = {omega * h:.4g} "
+                             f"(just above the theoretical 2.83) returned {got}, expected {expected}: so close to the "
                              "limit the amplitude grows too slowly to reach 1000 times its start in 20 steps; run the "
                              "test instead of comparing omega h with the theory")
 
@@ -229,7 +239,8 @@ def test_max_stable_step_is_measured(student, rng):
                      _spring_test("rk4", k, m, steps), np.sqrt(k / m),
                      f"max_stable_step('rk4', k, m, steps) with {length} on a random spring",
                      "a 20-step test" if steps == 20 else "that test",
-                     advice=": measure the limit with the `steps` you are given")
+                     advice=": measure the limit with the `steps` you are given",
+                     theory=stability.theory_max_step("rk4", k, m))
 
 
 # -- chain_max_stable_step ---------------------------------------------------------------------
@@ -246,7 +257,7 @@ def _check_chain(got, method, n, k, m, steps, call, test, advice=""):
     theory = _chain_reference(method, n, k, m)
     unstable = _chain_test(method, n, k, m, steps)
     _check_limit(got, _chain_limit(unstable, theory), unstable, STABLE[method] / theory, call, test,
-                 symbol="omega_max h", advice=advice)
+                 symbol="omega_max h", advice=advice, theory=theory)
 
 
 @pytest.mark.points(1)
@@ -289,20 +300,23 @@ def _state(x, v):
     return np.stack([np.atleast_1d(x), np.atleast_1d(v)], axis=1)[:, :, None].astype(float)
 
 
-def _check_implicit(got, x, v, k, m, h, call):
+def _check_implicit(got, x, v, k, m, h, call, hidden=False):
     if not isinstance(got, tuple) or len(got) != 2:
         kind = describe_value(got) if not isinstance(got, tuple) else f"a tuple of {len(got)} values"
         raise GradingFailure(f"{call} returned {kind}, expected the tuple (x_new, v_new)")
     f, X = stability.oscillator(k, m), _state(x, v)
     reference = implicit_euler(f, X, 0.0, h, tol=1e-13)
-    hints = {"an explicit Euler step": euler(f, X, 0.0, h), "a symplectic Euler step": symplectic_euler(f, X, 0.0, h)}
+    w2h2 = k / m * h**2
+    hints = {"an explicit Euler step": euler(f, X, 0.0, h), "a symplectic Euler step": symplectic_euler(f, X, 0.0, h),
+             "an implicit step divided by 1 + omega h instead of 1 + (omega h)^2":
+                 reference * (1 + w2h2) / (1 + np.sqrt(w2h2))}
     shape = np.shape(x)
     for part, name in ((0, "x_new"), (1, "v_new")):
         value = got[part]
         if shape == () and isinstance(value, (float, int, np.floating, np.integer)) and not isinstance(value, bool):
             value = np.array(float(value))
         expect_array(value, reference[:, part, 0].reshape(shape), f"{name} of {call}", rtol=1e-8, atol=1e-12,
-                     hints={label: H[:, part, 0].reshape(shape) for label, H in hints.items()})
+                     hints={label: H[:, part, 0].reshape(shape) for label, H in hints.items()}, show_values=not hidden)
 
 
 @pytest.mark.points(1)
@@ -321,19 +335,47 @@ def test_implicit_euler_spring_random(student, rng):
         x, v = rng.normal(size=p), rng.normal(size=p) * 5
         k, m = 10 ** rng.uniform(0, 6), 10 ** rng.uniform(-2, 1)
         h = 10 ** rng.uniform(-2, 2) / np.sqrt(k / m)
-        call = f"implicit_euler_spring(x, v of shape ({p},), k={k:.4g}, m={m:.4g}, h={h:.3g})"
+        call = f"implicit_euler_spring(x, v of shape ({p},), k, m, h) on random springs, x and v"
         got = student.call("implicit_euler_spring", x, v, k, m, h, check_inputs=True)
-        _check_implicit(got, x, v, k, m, h, call)
+        _check_implicit(got, x, v, k, m, h, call, hidden=True)
 
 
 # -- damping_factor ----------------------------------------------------------------------------
 
 
-def _check_damping(got, omega_h, call):
+def _per_second(omega_h, reference):
+    """A pattern: factors per unit of time (per second of a spring of some omega, or per period), not per step.
+
+    Simulated at omega with h = omega h / omega, the factor per second is the factor per step to the power
+    1 / h = omega / (omega h): log(got) / log(reference) * omega h is then the same omega for every omega h.
+    """
+    def wrong(got):
+        if not isinstance(got, np.ndarray) or got.shape != reference.shape or got.size < 2 or np.any(got <= 0):
+            return False
+        omega = np.log(got) / np.log(reference) * omega_h
+        if not (np.all(np.isfinite(omega)) and np.all(omega > 0) and np.ptp(omega) <= 1e-6 * omega[0]):
+            return False
+        if abs(omega[0] / (2 * np.pi) - 1) <= 1e-6:
+            return ("your factors are per period (2 pi / (omega h) steps), not per step: take the N-th root of "
+                    "A_N / A_0 over N steps")
+        return (f"your factors are per second of a spring with omega = {omega[0]:.3g} rad/s, not per step: the "
+                "amplitude factor per step is (A_N / A_0) ** (1 / N), with the number of steps N, not the simulated "
+                "time N h")
+    return wrong
+
+
+def _check_damping(got, omega_h, call, hidden=False, steps=50):
     exact = 1.0 / np.sqrt(1.0 + omega_h**2)
-    expect_array(got, stability.damping_factor(omega_h), call, rtol=1e-6, atol=1e-12,
+    reference = stability.damping_factor(omega_h)
+    expect_array(got, reference, call, rtol=1e-6, atol=1e-12, show_values=not hidden,
                  hints={"1 / (1 + (omega h)^2), the factor of the energy, not of the amplitude": exact**2,
-                        "1: no damping at all (an explicit or symplectic step?)": np.ones_like(omega_h)})
+                        "1: no damping at all (an explicit or symplectic step?)": np.ones_like(omega_h),
+                        f"the factor over all {steps} steps, A_N / A_0, not per step (take its N-th root)":
+                            reference**steps,
+                        "per second": _per_second(omega_h, reference),
+                        "your factors exceed 1 at some omega h: the amplitude grows, so the steps are not implicit "
+                        "Euler's, which damps at every step (look at implicit_euler_spring)":
+                            lambda got: bool(np.any(got > 1 + 1e-9))})
 
 
 @pytest.mark.points(1)
@@ -349,13 +391,15 @@ def test_damping_factor_random(student, rng):
     """damping_factor matches the library's measurement at random omega h from 0.01 to 100, inputs unchanged."""
     omega_h = np.sort(10 ** rng.uniform(-2, 2, size=int(rng.integers(5, 15))))
     got = student.call("damping_factor", omega_h, timeout=10, check_inputs=True)
-    _check_damping(got, omega_h, f"damping_factor(omega_h of {len(omega_h)} random values from {omega_h[0]:.3g} to {omega_h[-1]:.3g})")
+    _check_damping(got, omega_h, f"damping_factor(omega_h of {len(omega_h)} random values between 0.01 and 100)",
+                   hidden=True)
 
 
 # -- cost_table --------------------------------------------------------------------------------
 
 
-def _check_cost(got, ks, m, T, h_implicit, call):
+def _check_cost(got, ks, m, T, h_implicit, call, hidden=False):
+    """The student's step counts against ceil(T / h); a hidden test (`hidden`) names a stiffness by its rank."""
     names = ("symplectic_euler", "rk4", "implicit_euler")
     if not isinstance(got, dict) or any(name not in got for name in names):
         have = sorted(got) if isinstance(got, dict) else describe_value(got)
@@ -371,31 +415,73 @@ def _check_cost(got, ks, m, T, h_implicit, call):
         growth = np.polyfit(np.log(ks), np.log(np.maximum(steps.astype(float), 1e-300)), 1)[0]
         trend = 0.0 if name == "implicit_euler" else 0.5
         if not abs(growth - trend) <= 0.05:
+            why = ("the same count at every stiffness: implicit Euler is stable at any step, so its step is "
+                   "h_implicit whatever k" if trend == 0 else "h_max falls like 1/sqrt(k)")
             raise GradingFailure(f"in {call}, the {name} step counts grow like k^{growth:.2f}, expected k^{trend:g} "
-                                 f"({'the same count at every stiffness' if trend == 0 else 'h_max falls like 1/sqrt(k)'})")
+                                 f"({why})")
         bad = np.abs(steps - expected) > 0.05 * expected + 1
         if bad.any():
             i = int(np.argmax(bad))
-            raise GradingFailure(f"in {call}, {name} at k = {ks[i]:.3g} N/m takes {steps[i]:g} steps, expected about "
+            where = f"at the stiffness number {i + 1} of {len(ks)}" if hidden else f"at k = {ks[i]:.3g} N/m"
+            why = ""
+            if name != "implicit_euler":
+                h_max = np.array([stability.theory_max_step(name, k, m) for k in ks])
+                if np.all(np.abs(steps - np.ceil(T / h_max)) <= 0.02 * expected + 1):
+                    why = "; your counts are ceil(T / h_max): step at 0.9 h_max, a margin below the limit"
+                elif np.all(np.abs(steps - np.floor(T / (0.9 * h_max))) <= 1):
+                    why = "; your counts are rounded down: ceil(T / h) steps cover T, floor(T / h) fall short of it"
+            raise GradingFailure(f"in {call}, {name} {where} takes {steps[i]:g} steps, expected about "
                                  f"{expected[i]:.0f} (ceil(T / h) with h = "
-                                 f"{'h_implicit' if name == 'implicit_euler' else '0.9 h_max'})")
+                                 f"{'h_implicit' if name == 'implicit_euler' else '0.9 h_max'}){why}")
+
+
+def _figure_cost(feedback, got, ks, m, T, h_implicit, hidden=False):
+    """Attach the student's step counts against k beside the expected ones, before the test judges them.
+
+    A hidden test plots k / k_0 and counts relative to the expected count at k_0 of each method, so that its
+    random mass, T and h_implicit do not show.
+    """
+    series = []
+    for name in ("symplectic_euler", "rk4", "implicit_euler"):
+        if name == "implicit_euler":
+            expected = np.full(len(ks), np.ceil(T / h_implicit))
+        else:
+            expected = np.ceil(T / (0.9 * np.array([stability.theory_max_step(name, k, m) for k in ks])))
+        yours = got.get(name) if isinstance(got, dict) else None
+        scale = expected[0] if hidden else 1.0
+        try:
+            yours = None if yours is None else np.asarray(yours, dtype=float) / scale
+        except (TypeError, ValueError):
+            yours = None
+        x = ks / ks[0] if hidden else ks
+        if yours is not None:
+            series.append({"label": f"yours: {name}", "x": x, "y": yours, "group": name})
+        series.append({"label": f"expected: {name}", "x": x, "y": expected / scale, "group": name,
+                       "role": "reference"})
+    feedback.curve("Steps of one simulated second against the stiffness" + (" (relative)" if hidden else ""),
+                   "k / softest k" if hidden else "k (N/m)",
+                   "steps / expected steps at the softest k" if hidden else "steps", series, loglog=True,
+                   caption="Explicit steppers need steps growing like sqrt(k) (h_max falls like 1/sqrt(k)); "
+                           "implicit Euler's count stays flat.")
 
 
 @pytest.mark.points(1)
-def test_cost_table_public(student):
+def test_cost_table_public(student, feedback):
     """cost_table counts the steps of one simulated second for k = 100 to 1e8 N/m, m = 1 kg, h_implicit = 0.01 s."""
     ks = np.array([1e2, 1e4, 1e6, 1e8])
-    _check_cost(student.call("cost_table", ks, timeout=20), ks, 1.0, 1.0, 0.01,
-                "cost_table(ks=[1e2, 1e4, 1e6, 1e8], m=1, T=1, h_implicit=0.01)")
+    got = student.call("cost_table", ks, timeout=20)
+    _figure_cost(feedback, got, ks, 1.0, 1.0, 0.01)
+    _check_cost(got, ks, 1.0, 1.0, 0.01, "cost_table(ks=[1e2, 1e4, 1e6, 1e8], m=1, T=1, h_implicit=0.01)")
 
 
 @pytest.mark.points(2)
 @pytest.mark.hidden
-def test_cost_table_trend(student, rng):
+def test_cost_table_trend(student, rng, feedback):
     """cost_table: explicit step counts grow like sqrt(k), implicit Euler's stay flat, for a random mass, T and h."""
     ks = 10 ** (rng.uniform(5, 6) + np.array([0.0, 1.5, 3.0, 4.5]))
     m, T, h_implicit = 10 ** rng.uniform(-1, 1), rng.uniform(0.5, 2.0), rng.choice([1 / 24, 1 / 30, 1 / 60, 0.01])
     m = float(m)
-    call = f"cost_table(ks from {ks[0]:.3g} to {ks[-1]:.3g} N/m, m={m:.3g}, T={T:.3g}, h_implicit={h_implicit:.3g})"
+    call = "cost_table(ks, m, T, h_implicit) for 4 random stiffnesses, a random mass, T and h_implicit"
     got = student.call("cost_table", ks, m, T, float(h_implicit), timeout=20)
-    _check_cost(got, ks, m, T, float(h_implicit), call)
+    _figure_cost(feedback, got, ks, m, T, float(h_implicit), hidden=True)
+    _check_cost(got, ks, m, T, float(h_implicit), call, hidden=True)

@@ -125,8 +125,66 @@ def _robust_cloth(rng, iterations, tries=40, **options):
 
 
 def _describe(x, ij, free, s):
-    return (f"a cloth of {len(x)} particles, {len(ij)} springs, {int((~free).sum())} pinned, "
-            f"max_strain={s:.3g}")
+    """A random cloth in a message: its size, not its random parameters (`s` stays out)."""
+    return f"a random cloth of {len(x)} particles, {len(ij)} springs, {int((~free).sum())} pinned"
+
+
+def _pass_variant(x, ij, L0, free, s, ignore_pins=False, one_end=False, from_rest=False, lost=False, summed=False):
+    """One Jacobi pass with a typical mistake (the options), to name what a wrong pass did."""
+    i, j = ij[:, 0], ij[:, 1]
+    movable = np.ones(len(x), dtype=bool) if ignore_pins else free
+    f_i, f_j = movable[i].astype(float), movable[j].astype(float)
+    total = f_i + f_j
+    if one_end:
+        w_i, w_j = f_i * (1.0 - f_j), f_j
+    else:
+        w_i = np.divide(f_i, total, out=np.zeros_like(f_i), where=total > 0)
+        w_j = np.divide(f_j, total, out=np.zeros_like(f_j), where=total > 0)
+    d = x[j] - x[i]
+    L = np.linalg.norm(d, axis=1)
+    limit = (1.0 + s) * L0
+    too_long = (L > limit) & (total > 0)
+    e = np.where(too_long, L - (L0 if from_rest else limit), 0.0)
+    u = d / np.where(L > 0, L, 1.0)[:, None]
+    dx = np.zeros_like(x)
+    if lost:
+        dx[i] += (w_i * e)[:, None] * u
+        dx[j] -= (w_j * e)[:, None] * u
+    else:
+        np.add.at(dx, i, (w_i * e)[:, None] * u)
+        np.add.at(dx, j, -(w_j * e)[:, None] * u)
+    count = np.bincount(i[too_long], minlength=len(x)) + np.bincount(j[too_long], minlength=len(x))
+    return x + movable[:, None] * dx / (1.0 if summed else np.maximum(count, 1)[:, None])
+
+
+def _pass_hints(x, ij, L0, free, s):
+    """Typical wrong Jacobi passes: label -> the positions they give."""
+    return {
+        "a pass that moves the pinned particles too (their share of the excess goes to the free end)":
+            _pass_variant(x, ij, L0, free, s, ignore_pins=True),
+        "a pass that shortens the springs to their rest length L0, not to (1 + max_strain) L0":
+            _pass_variant(x, ij, L0, free, s, from_rest=True),
+        "a pass that moves only one end of a spring with two free ends (each moves half the excess)":
+            _pass_variant(x, ij, L0, free, s, one_end=True),
+        "a pass that adds up the corrections at a particle instead of averaging them":
+            _pass_variant(x, ij, L0, free, s, summed=True),
+        "a pass that loses corrections at repeated indices (x[i] += c keeps one per particle; use np.add.at or "
+        "np.bincount)": _pass_variant(x, ij, L0, free, s, lost=True),
+    }
+
+
+def _pass_diagnosis(student, x, ij, L0, free, s):
+    """After a wrong projection: is one pass of the student's provot_pass right on this cloth?"""
+    try:
+        got = student.call("provot_pass", x, ij, L0, free, s)
+        expect_array(got, provot_projection(x, ij, L0, free, s, iterations=1, tol=0.0).x, "provot_pass",
+                     rtol=ROUNDING, atol=ROUNDING * L0.min(), hints=_pass_hints(x, ij, L0, free, s))
+    except GradingFailure as failure:
+        text = str(failure)
+        clause = text.split("; ", 1)[1] if "; your " in text else ""
+        return ("; one pass of your provot_pass on this cloth does not match the reference"
+                + (f" ({clause})" if clause else "") + ", see the tests of provot_pass")
+    return "; one pass of your provot_pass is right on this cloth, so look at the loop: when it stops, what it returns"
 
 
 # -- common checks -----------------------------------------------------------------------------
@@ -142,12 +200,14 @@ def _expect_pair(got, call):
     return x_new, int(passes)
 
 
-def _expect_pins_fixed(x_new, x, free, call):
+def _expect_pins_fixed(x_new, x, free, call, hidden=False):
     moved = np.flatnonzero(~free & np.any(x_new != x, axis=1)) if x_new.shape == x.shape else []
     if len(moved):
         k = int(moved[0])
-        raise GradingFailure(f"{call} moved pinned particle {k} from {np.round(x[k], 4).tolist()} to "
-                             f"{np.round(x_new[k], 4).tolist()}; pinned particles never move")
+        where = (f"by {np.linalg.norm(x_new[k] - x[k]):.3g} m" if hidden else
+                 f"from {np.round(x[k], 4).tolist()} to {np.round(x_new[k], 4).tolist()}")
+        raise GradingFailure(f"{call} moved pinned particle {k} {where}; pinned particles never move (only free "
+                             "particles take a share of the excess: all of it when the other end is pinned)")
 
 
 def _expect_within_limit(x_new, ij, L0, free, s, tol, call):
@@ -157,10 +217,26 @@ def _expect_within_limit(x_new, ij, L0, free, s, tol, call):
     if over.any():
         k = int(np.argmax(np.where(over, strain, -np.inf)))
         raise GradingFailure(f"{call}: after your projection spring {k} {ij[k].tolist()} still has strain "
-                             f"{100 * strain[k]:.3f}%, above max_strain + tol = {100 * (s + tol):.3f}%")
+                             f"{100 * strain[k]:.3f}%, {100 * (strain[k] - s - tol):.3g} percentage points above "
+                             "max_strain + tol: keep making passes while a spring with a free end is too long")
 
 
 # -- spring_strain -----------------------------------------------------------------------------
+
+
+def _strain_hints(x, ij, L0):
+    """Typical wrong strains: label -> the values they give."""
+    L = np.linalg.norm(x[ij[:, 0]] - x[ij[:, 1]], axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):  # a spring of length 0 has no upside-down ratio
+        upside_down = L0 / L - 1
+    return {
+        "(L^2 - L0^2) / (2 L0^2), the Green strain: this exercise uses the engineering strain L / L0 - 1":
+            (L**2 - L0**2) / (2 * L0**2),
+        "L - L0, the elongation in metres: the strain is relative, (L - L0) / L0": L - L0,
+        "L0 / L - 1, the ratio upside down (the strain is L / L0 - 1)": upside_down,
+        "L / L0, the stretch ratio without the - 1": L / L0,
+        "|L / L0 - 1|: a compressed spring has a negative strain": np.abs(L / L0 - 1),
+    }
 
 
 @pytest.mark.points(1)
@@ -170,7 +246,8 @@ def test_spring_strain_three_springs(student):
     ij = np.array([[0, 1], [2, 1], [3, 2]])
     L0 = np.array([1.0, 2.0, 5.0])
     got = student.call("spring_strain", x, ij, L0, check_inputs=True)
-    expect_array(got, [0.5, 0.0, 2.5 / 5.0 - 1.0], "spring_strain(x, [[0, 1], [2, 1], [3, 2]], L0=[1, 2, 5])")
+    expect_array(got, [0.5, 0.0, 2.5 / 5.0 - 1.0], "spring_strain(x, [[0, 1], [2, 1], [3, 2]], L0=[1, 2, 5])",
+                 hints=_strain_hints(x, ij, L0))
 
 
 @pytest.mark.points(1)
@@ -180,14 +257,26 @@ def test_spring_strain_random_cloth(student, rng):
     x, ij, L0, free = _random_cloth(rng)
     for x_test in (x, x[:, :2]):
         expect_array(student.call("spring_strain", x_test, ij, L0, check_inputs=True), _strain(x_test, ij, L0),
-                     f"spring_strain on a random cloth of {len(ij)} springs in {x_test.shape[1]}D")
+                     f"spring_strain on a random cloth of {len(ij)} springs in {x_test.shape[1]}D",
+                     hints=_strain_hints(x_test, ij, L0), show_values=False)
 
 
 # -- max_strain_history ------------------------------------------------------------------------
 
 
+_UNCLIPPED = ("the largest strain without the clip at 0: a frame where every spring is compressed has "
+              "max_strain_history 0, not a negative strain (max(0, largest strain))")
+
+
+def _figure_strain(feedback, got, expected, title):
+    """Attach the student's largest strain per frame beside the reference's, before the test judges it."""
+    feedback.curve(title, "frame", "largest strain L / L0 - 1",
+                   [{"label": "yours", "y": got}, {"label": "reference", "y": expected}],
+                   caption="A frame where every spring is compressed has largest strain 0, not a negative one.")
+
+
 @pytest.mark.points(1)
-def test_max_strain_history_frames(student):
+def test_max_strain_history_frames(student, feedback):
     """max_strain_history gives the largest strain of each frame, 0 for a frame where all springs are compressed."""
     L0 = np.array([1.0, 1.0])
     ij = np.array([[0, 1], [1, 2]])
@@ -195,13 +284,15 @@ def test_max_strain_history_frames(student):
     X = np.zeros((3, 3, 2, 2))
     X[:, :, 0, 0] = frames
     got = student.call("max_strain_history", X, ij, L0, check_inputs=True)
+    _figure_strain(feedback, got, [0.2, 0.0, 0.5], "Largest strain of each of the 3 frames")
     expect_array(got, [0.2, 0.0, 0.5], "max_strain_history on 3 frames of 2 springs (strains [0.2, 0], "
-                 "[-0.1, -0.1], [0, 0.5])", hints={"the largest |strain| (compression counted)": [0.2, 0.1, 0.5]})
+                 "[-0.1, -0.1], [0, 0.5])", hints={"the largest |strain| (compression counted)": [0.2, 0.1, 0.5],
+                                                   _UNCLIPPED: [0.2, -0.1, 0.5]})
 
 
 @pytest.mark.points(2)
 @pytest.mark.hidden
-def test_max_strain_history_recorded_run(student, rng):
+def test_max_strain_history_recorded_run(student, rng, feedback):
     """max_strain_history matches MassSpringSystem.max_strain on each frame of a recorded cloth simulation."""
     n = int(rng.integers(4, 8))
     c = cloth(n, n, plane=str(rng.choice(["vertical", "horizontal"])), k_structural=rng.uniform(10.0, 50.0))
@@ -212,8 +303,12 @@ def test_max_strain_history_recorded_run(student, rng):
         springs = c.springs[kind]
         expected = [c.max_strain(Xk, kind) for Xk in X]
         got = student.call("max_strain_history", X, springs.indices, springs.rest_length, check_inputs=True)
+        _figure_strain(feedback, got, expected, f"Largest strain per frame of a recorded cloth, {kind} springs")
+        strains = [springs.strain(Xk[:, 0]) for Xk in X]
         expect_array(got, expected, f"max_strain_history on {len(X)} recorded frames of a {n} x {n} cloth "
-                     f"({kind} springs; frame 0 compressed)", rtol=1e-9)
+                     f"({kind} springs; frame 0 compressed)", rtol=1e-9, show_values=False,
+                     hints={_UNCLIPPED: [e.max() for e in strains],
+                            "the largest |strain| (compression counted)": [np.abs(e).max() for e in strains]})
 
 
 # -- provot_pass -------------------------------------------------------------------------------
@@ -273,9 +368,9 @@ def test_provot_pass_random_cloths(student, rng):
         call = f"provot_pass on {_describe(x, ij, free, s)}, d = {x.shape[1]}"
         got = student.call("provot_pass", x, ij, L0, free, s, check_inputs=True)
         if isinstance(got, np.ndarray) and got.shape == x.shape:
-            _expect_pins_fixed(got, x, free, call)
+            _expect_pins_fixed(got, x, free, call, hidden=True)
         expected = provot_projection(x, ij, L0, free, s, iterations=1, tol=0.0).x
-        expect_array(got, expected, call, rtol=ROUNDING)
+        expect_array(got, expected, call, rtol=ROUNDING, hints=_pass_hints(x, ij, L0, free, s), show_values=False)
 
 
 # -- provot_project ----------------------------------------------------------------------------
@@ -318,12 +413,15 @@ def test_provot_project_agrees_with_reference(student, rng):
     """provot_project matches the reference Jacobi projection (positions and passes) on random cloths, some capped."""
     for cap in (500, 500, int(rng.integers(2, 12))):
         x, ij, L0, free, s, tol, ref = _robust_cloth(rng, cap)
-        call = f"provot_project on {_describe(x, ij, free, s)}, iterations={cap}, tol={tol:.3g}"
+        call = f"provot_project on {_describe(x, ij, free, s)}, iterations={cap}"
         x_new, passes = _expect_pair(student.call("provot_project", x, ij, L0, free, s, cap, tol, check_inputs=True),
                                      call)
         if isinstance(x_new, np.ndarray) and x_new.shape == x.shape:
-            _expect_pins_fixed(x_new, x, free, call)
-        expect_array(x_new, ref.x, call, rtol=0, atol=ROUNDING * L0.min())
+            _expect_pins_fixed(x_new, x, free, call, hidden=True)
+        try:
+            expect_array(x_new, ref.x, call, rtol=0, atol=ROUNDING * L0.min(), show_values=False)
+        except GradingFailure as failure:
+            raise GradingFailure(str(failure) + _pass_diagnosis(student, x, ij, L0, free, s)) from None
         if passes != ref.iterations:
             raise GradingFailure(f"{call} reported {passes} passes, the reference made {ref.iterations}")
 
@@ -340,12 +438,12 @@ def test_provot_project_properties(student, rng):
             ref = provot_projection(x, ij, L0, free, s, 500, tol)
             if ref.converged and ref.iterations > 1:
                 break
-        call = f"provot_project on {_describe(x, ij, free, s)}, tol={tol:.3g}"
+        call = f"provot_project on {_describe(x, ij, free, s)}"
         x_new, passes = _expect_pair(student.call("provot_project", x, ij, L0, free, s, 500, tol, check_inputs=True),
                                      call)
         if not isinstance(x_new, np.ndarray) or x_new.shape != x.shape or not np.isfinite(x_new).all():
-            expect_array(x_new, ref.x, call)  # says what is wrong with the array
-        _expect_pins_fixed(x_new, x, free, call)
+            expect_array(x_new, ref.x, call, show_values=False)  # says what is wrong with the array
+        _expect_pins_fixed(x_new, x, free, call, hidden=True)
         _expect_within_limit(x_new, ij, L0, free, s, tol, call)
         if passes >= 500:
             raise GradingFailure(f"{call} made {passes} passes, the cap; the reference needed {ref.iterations}. Stop as "
@@ -387,13 +485,18 @@ def test_constrain_state_random_cloths(student, rng):
         v = rng.normal(0.0, 0.5, x.shape)
         v[~free] = 0.0
         X = np.stack([x, v], axis=1)
-        call = f"constrain_state(X, h={h:.3g}) on {_describe(x, ij, free, s)}, iterations={cap}, tol={tol:.3g}"
+        call = f"constrain_state(X, h) on {_describe(x, ij, free, s)}, iterations={cap}"
         X_new, passes = _expect_pair(student.call("constrain_state", X, h, ij, L0, free, s, cap, tol,
                                                   check_inputs=True), call)
         expected = np.stack([ref.x, v + (ref.x - x) / h], axis=1)
         stale = np.stack([ref.x, v], axis=1)
-        expect_array(X_new, expected, call, rtol=1e-9, atol=ROUNDING * L0.min() / h,
-                     hints={"the velocities left unchanged (v += dx / h is missing)": stale})
+        expect_array(X_new, expected, call, rtol=1e-9, atol=ROUNDING * L0.min() / h, show_values=False,
+                     hints={"the velocities left unchanged (v += dx / h is missing)": stale,
+                            "v = dx / h (the velocity of the step replaced; add dx / h to it)":
+                                np.stack([ref.x, (ref.x - x) / h], axis=1),
+                            "v + dx, the correction not divided by h (a velocity is dx / h)":
+                                np.stack([ref.x, v + (ref.x - x)], axis=1)})
         if passes != ref.iterations:
             raise GradingFailure(f"{call} reported {passes} passes, the reference made {ref.iterations}")
-        expect_float(float(np.abs(X_new[~free, 1]).max(initial=0.0)), 0.0, f"the velocity of the pins after {call}")
+        expect_float(float(np.abs(X_new[~free, 1]).max(initial=0.0)), 0.0, f"the velocity of the pins after {call}",
+                     show_values=False)

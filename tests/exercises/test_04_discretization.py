@@ -18,7 +18,7 @@ reference library (:func:`particles.massspring.cloth_masses`,
 import numpy as np
 import pytest
 
-from particles.course.expect import expect_array, expect_float
+from particles.course.expect import LN10, expect_array, expect_float
 from particles.course.runner import GradingFailure, describe_value
 from particles.massspring import cloth, cloth_masses, cloth_springs, cloth_stiffness
 from particles.studies.discretization import static_sag
@@ -100,20 +100,28 @@ def _mass_hints(nx, ny, W, H, rho):
     }
 
 
-def _check_masses(student, nx, ny, W, H, rho):
-    call = f"particle_masses(nx={nx}, ny={ny}, width={W:.4g}, height={H:.4g}, rho={rho:.4g})"
+_SAME_MASS = ("your particles all have the same mass: a corner stands for a quarter of a cell, an edge particle for "
+              "half a cell, an interior one for a whole cell (rho times its dual cell's area)")
+
+
+def _check_masses(student, nx, ny, W, H, rho, hidden=False):
+    """The student's masses against the dual-cell rule; a hidden test (`hidden`) keeps W, H and rho out of messages."""
+    call = (f"particle_masses(nx={nx}, ny={ny}, width, height, rho) on a random sheet" if hidden else
+            f"particle_masses(nx={nx}, ny={ny}, width={W:.4g}, height={H:.4g}, rho={rho:.4g})")
     got = student.call("particle_masses", nx, ny, W, H, rho)
     expected = cloth_masses(nx, ny, W, H, rho)
+    hints = dict(_mass_hints(nx, ny, W, H, rho), **{_SAME_MASS: lambda m: m.size > 1 and np.ptp(m) == 0})
     if isinstance(got, np.ndarray) and got.shape == expected.shape and got.dtype.kind == "f" \
             and np.all(np.isfinite(got)) and not np.isclose(got.sum(), rho * W * H, rtol=1e-9):
         hint = ""
-        for label, wrong in _mass_hints(nx, ny, W, H, rho).items():
-            if np.allclose(got, wrong, rtol=1e-9):
-                hint = f"; your result matches {label}"
+        for label, wrong in hints.items():
+            if (wrong(got) if callable(wrong) else np.allclose(got, wrong, rtol=1e-9)):
+                hint = f"; {label}" if label.startswith("your ") else f"; your result matches {label}"
                 break
-        raise GradingFailure(f"the masses of {call} add up to {got.sum():.6g} kg, but the sheet weighs "
-                             f"rho W H = {rho * W * H:.6g} kg{hint}")
-    expect_array(got, expected, call, rtol=1e-9, hints=_mass_hints(nx, ny, W, H, rho))
+        total = (f"add up to {got.sum() / (rho * W * H):.4g} times rho W H, the mass of the sheet" if hidden else
+                 f"add up to {got.sum():.6g} kg, but the sheet weighs rho W H = {rho * W * H:.6g} kg")
+        raise GradingFailure(f"the masses of {call} {total}{hint}")
+    expect_array(got, expected, call, rtol=1e-9, hints=hints, show_values=not hidden)
 
 
 @pytest.mark.points(1)
@@ -128,14 +136,15 @@ def test_masses_random(student, rng):
     """particle_masses matches the dual-cell rule on random sheets, grids and densities."""
     for _ in range(4):
         nx, ny, W, H = _random_sheet(rng, 3, 30)
-        _check_masses(student, nx, ny, W, H, float(rng.uniform(0.05, 2.0)))
+        _check_masses(student, nx, ny, W, H, float(rng.uniform(0.05, 2.0)), hidden=True)
 
 
 # -- spring_stiffness --------------------------------------------------------------------------
 
 
-def _stiffness_of(student, nx, ny, W, H, Y):
-    call = f"spring_stiffness(nx={nx}, ny={ny}, width={W:.4g}, height={H:.4g}, {_moduli_text(Y)})"
+def _stiffness_of(student, nx, ny, W, H, Y, hidden=False):
+    call = (f"spring_stiffness(nx={nx}, ny={ny}, width, height, Y) on a random sheet and fabric" if hidden else
+            f"spring_stiffness(nx={nx}, ny={ny}, width={W:.4g}, height={H:.4g}, {_moduli_text(Y)})")
     got = student.call("spring_stiffness", nx, ny, W, H, dict(Y))
     if not isinstance(got, dict):
         raise GradingFailure(f"{call} returned {describe_value(got)}, expected a dict with the keys "
@@ -190,10 +199,10 @@ def _stiffness_hints(nx, ny, W, H, Y, kind):
     return hints
 
 
-def _check_kind(got, call, nx, ny, W, H, Y, kind):
+def _check_kind(got, call, nx, ny, W, H, Y, kind, hidden=False):
     expected = cloth_stiffness(nx, ny, W, H, Y)[kind]
     expect_array(got[kind], expected, f"the '{kind}' stiffnesses of {call}", rtol=1e-9,
-                 hints=_stiffness_hints(nx, ny, W, H, Y, kind))
+                 hints=_stiffness_hints(nx, ny, W, H, Y, kind), show_values=not hidden)
 
 
 @pytest.mark.points(1)
@@ -224,9 +233,9 @@ def test_stiffness_random(student, rng):
     for _ in range(3):
         nx, ny, W, H = _random_sheet(rng, 3, 25)
         _, Y = _random_fabric(rng)
-        got, call = _stiffness_of(student, nx, ny, W, H, Y)
+        got, call = _stiffness_of(student, nx, ny, W, H, Y, hidden=True)
         for kind in KINDS:
-            _check_kind(got, call, nx, ny, W, H, Y, kind)
+            _check_kind(got, call, nx, ny, W, H, Y, kind, hidden=True)
 
 
 # -- cloth_sag ---------------------------------------------------------------------------------
@@ -238,22 +247,80 @@ def _reference_sag(n, W, H, rho, Y):
     return static_sag(c)
 
 
-def _check_sag_converges(student, resolutions, W, H, rho, Y):
-    """The student's sags at `resolutions` (n x n) agree with each other and with the library's converged sag."""
+def _sag_variants(n, W, H, rho, Y):
+    """Typical wrong sags of the library's relaxed n x n cloth: label -> value (m)."""
+    c = cloth(n, n, W, H, pins="top edge", scaling="physical", areal_density=rho, stretch_modulus=Y["structural"],
+              shear_modulus=Y["shear"], flexion_modulus=Y["flexion"])
+    z0 = c.X[:, 0, 2].copy()
+    static_sag(c)
+    z = c.X[:, 0, 2]
+    free = np.ones(len(z), dtype=bool)
+    free[c.pinned] = False
+    return {
+        "your sag is the mean drop of the particles, not the drop of the lowest particle: the sag is "
+        "z_flat.min() - z.min()": float(np.mean(z0 - z)),
+        "your sag is the mean drop of the free particles, not the drop of the lowest particle: the sag is "
+        "z_flat.min() - z.min()": float(np.mean((z0 - z)[free])),
+        "your sag is the largest drop of any particle, not the drop of the lowest point (z_flat.min() - z.min())":
+            float(np.max(z0 - z)),
+        "your sag is the depth of the lowest particle below the pins, -z.min(): subtract the flat sheet's lowest z":
+            float(-z.min()),
+    }
+
+
+def _sag_diagnosis(student, got, n, W, H, rho, Y):
+    """Why a sag is off: a wrong measurement of the sag, or wrong masses or stiffnesses (checked at this n)."""
+    for label, value in _sag_variants(n, W, H, rho, Y).items():
+        if abs(got - value) <= 5e-3 * abs(value):
+            return f"; {label}"
+    return _parts_diagnosis(student, n, W, H, rho, Y) or (
+        "; your masses and stiffnesses match the reference, so look at sag: relax the cloth, then the drop of its "
+        "lowest particle")
+
+
+def _parts_diagnosis(student, n, W, H, rho, Y):
+    """'; your particle_masses does not match ...' when the student's masses or stiffnesses are wrong at n, else ''."""
+    for name, args, reference in (("particle_masses", (n, n, W, H, rho), cloth_masses(n, n, W, H, rho)),
+                                  ("spring_stiffness", (n, n, W, H, dict(Y)), None)):
+        try:
+            value = student.call(name, *args)
+            if reference is None:
+                expected = cloth_stiffness(n, n, W, H, Y)
+                ok = isinstance(value, dict) and all(
+                    isinstance(value.get(k), np.ndarray) and value[k].shape == expected[k].shape
+                    and np.allclose(value[k], expected[k], rtol=1e-9) for k in KINDS)
+            else:
+                ok = isinstance(value, np.ndarray) and value.shape == reference.shape and \
+                    np.allclose(value, reference, rtol=1e-9)
+        except GradingFailure:
+            ok = False
+        if not ok:
+            return f"; your {name} does not match the reference at n = {n}, see the tests of {name}"
+    return ""
+
+
+def _check_sag_converges(student, resolutions, W, H, rho, Y, hidden=False):
+    """The student's sags at `resolutions` (n x n) agree with each other and with the library's converged sag.
+
+    A hidden test (`hidden`) keeps its random sheet and fabric out of the message.
+    """
     reference = _reference_sag(max(resolutions), W, H, rho, Y)
     sags = []
     for n in resolutions:
-        call = f"cloth_sag(nx={n}, ny={n}, width={W:.3g}, height={H:.3g}, {_fabric_text(rho, Y)})"
+        call = (f"cloth_sag(nx={n}, ny={n}, width, height, rho, Y) of a random sheet and fabric" if hidden else
+                f"cloth_sag(nx={n}, ny={n}, width={W:.3g}, height={H:.3g}, {_fabric_text(rho, Y)})")
         got = student.call("cloth_sag", n, n, W, H, rho, dict(Y), timeout=SAG_TIMEOUT)
         got = _number(got, call)
         sags.append(got)
         if not abs(got - reference) <= SAG_TOLERANCE * reference:
             so_far = ", ".join(f"{1000 * s:.4g}" for s in sags)
+            fabric = "a random sheet and fabric" if hidden else f"{W:.3g} m x {H:.3g} m, {_fabric_text(rho, Y)}"
             raise GradingFailure(
                 f"cloth_sag gives {so_far} mm at {', '.join(map(str, resolutions[:len(sags)]))} particles per side "
-                f"for {W:.3g} m x {H:.3g} m, {_fabric_text(rho, Y)}: expected the sag of that fabric, "
+                f"for {fabric}: expected the sag of that fabric, "
                 f"{1000 * reference:.4g} mm, within {100 * SAG_TOLERANCE:g}% at every resolution "
-                f"(off by {100 * (got - reference) / reference:+.1f}% at n = {n})")
+                f"(off by {100 * (got - reference) / reference:+.1f}% at n = {n})"
+                + _sag_diagnosis(student, got, n, W, H, rho, Y))
     spread = (max(sags) - min(sags)) / reference
     if spread > SAG_TOLERANCE:
         raise GradingFailure(f"cloth_sag changes by {100 * spread:.1f}% between {resolutions[0]} and "
@@ -261,19 +328,49 @@ def _check_sag_converges(student, resolutions, W, H, rho, Y):
                              f"{100 * SAG_TOLERANCE:g}%")
 
 
+def _figure_sag(feedback, student, resolutions, W, H, rho, Y, hidden=False):
+    """Attach the student's sag against the resolution beside the library's, before the test judges it.
+
+    A hidden test plots sags relative to the library's at the finest resolution, so that its random sheet and
+    fabric do not show. The student's cloth_sag is called until its first failure (the test reports it).
+    """
+    reference = np.array([_reference_sag(n, W, H, rho, Y) for n in resolutions])
+    yours = []
+    for n in resolutions:
+        try:
+            value = student.call("cloth_sag", n, n, W, H, rho, dict(Y), timeout=SAG_TIMEOUT)
+        except GradingFailure:
+            break
+        if isinstance(value, np.ndarray) and value.shape == ():
+            value = value[()]
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+            break
+        yours.append(float(value))
+    scale = reference[-1] if hidden else 1e-3
+    series = [{"label": "reference", "x": resolutions, "y": reference / scale}]
+    if yours:
+        series.insert(0, {"label": "yours", "x": resolutions[:len(yours)], "y": np.array(yours) / scale})
+    feedback.curve("Static sag of " + ("a random sheet" if hidden else "the 1 m fabric") + " against the resolution",
+                   "particles per side n", "sag / the library's sag at the finest n" if hidden else "sag (mm)",
+                   series, caption=f"With physical masses and stiffnesses the sag is the same at every n "
+                                   f"(within {100 * SAG_TOLERANCE:g}%).")
+
+
 @pytest.mark.points(2)
-def test_sag_converges(student):
+def test_sag_converges(student, feedback):
     """cloth_sag of the notebook's 1 m fabric is the same sag at 8 and 16 particles per side."""
+    _figure_sag(feedback, student, [8, 16], 1.0, 1.0, RHO, FABRIC)
     _check_sag_converges(student, [8, 16], 1.0, 1.0, RHO, FABRIC)
 
 
 @pytest.mark.points(3)
 @pytest.mark.hidden
-def test_sag_converges_random_fabric(student, rng):
+def test_sag_converges_random_fabric(student, rng, feedback):
     """cloth_sag of a random sheet and fabric is the same sag at 8, 12 and 16 particles per side."""
     W, H = float(rng.uniform(0.5, 1.5)), float(rng.uniform(0.5, 1.5))
     rho, Y = _random_fabric(rng)
-    _check_sag_converges(student, [8, 12, 16], W, H, rho, Y)
+    _figure_sag(feedback, student, [8, 12, 16], W, H, rho, Y, hidden=True)
+    _check_sag_converges(student, [8, 12, 16], W, H, rho, Y, hidden=True)
 
 
 # -- stable_step and fit_exponent --------------------------------------------------------------
@@ -294,14 +391,19 @@ def _student_steps(student, resolutions, W, H, rho, Y, random_fabric=False):
         got = _number(student.call("stable_step", n, n, W, H, rho, dict(Y)), call)
         expected = _reference_step(n, W, H, rho, Y)
         if got > (1 + STEP_ABOVE) * expected:
-            raise GradingFailure(f"{call} returned {1000 * got:.4g} ms, {100 * (got - expected) / expected:.2g}% "
+            above = 100 * (got - expected) / expected
+            why = _parts_diagnosis(student, n, W, H, rho, Y) or (
+                ": omega_max comes from the eigenvalues of the whole cloth (system.max_stable_step()), not from one "
+                "spring")
+            percent = f"{above:.2g}%" if above < 100 else f"{above:.0f}%"
+            raise GradingFailure(f"{call} returned {1000 * got:.4g} ms, {percent} "
                                  f"above 2 / omega_max = {1000 * expected:.4g} ms of the physically scaled cloth, a "
-                                 "step at which symplectic Euler blows up on it: omega_max comes from the eigenvalues "
-                                 "of the whole cloth (system.max_stable_step()), not from one spring")
+                                 f"step at which symplectic Euler blows up on it{why}")
         if not got >= (1 - STEP_BELOW) * expected:
             raise GradingFailure(f"{call} returned {1000 * got:.4g} ms, expected 2 / omega_max = "
                                  f"{1000 * expected:.4g} ms for the physically scaled cloth "
-                                 f"(off by {100 * (got - expected) / expected:+.1f}%)")
+                                 f"(off by {100 * (got - expected) / expected:+.1f}%)"
+                                 + _parts_diagnosis(student, n, W, H, rho, Y))
         steps.append(got)
     return np.array(steps)
 
@@ -326,15 +428,26 @@ def test_stable_step_shrinks_like_the_spacing(student, rng):
                              "(omega_max ~ sqrt(k / m) with k fixed and m ~ dx^2)")
 
 
-def _check_exponent(student, spacing, h, what, tolerance=0.02):
+def _check_exponent(student, spacing, h, what, tolerance=0.02, hidden=False):
+    """The student's exponent against the least-squares slope; a hidden test (`hidden`) does not print the slope."""
     call = f"fit_exponent(spacing, h_max) on {what}"
     got = student.call("fit_exponent", spacing, h, check_inputs=True)
     expected = fit_order(spacing, h)
     got = _number(got, call)
     if not abs(got - expected) <= tolerance:
-        message = f"{call} returned p = {got:.4g}, expected {expected:.4g}"
+        message = (f"{call} returned p = {got:.4g}, {abs(got - expected):.3g} away from the least-squares slope "
+                   f"(tolerance {tolerance:g})" if hidden else
+                   f"{call} returned p = {got:.4g}, expected {expected:.4g}")
+        if expected != 0 and abs(got * LN10 / expected - 1) <= 1e-6:
+            message += ("; your result is the slope divided by ln(10) = 2.303: log10 of h_max against ln of the "
+                        "spacing; use the same logarithm on both axes")
+        elif expected != 0 and abs(got / LN10 / expected - 1) <= 1e-6:
+            message += ("; your result is the slope times ln(10) = 2.303: ln of h_max against log10 of the spacing; "
+                        "use the same logarithm on both axes")
         swapped = np.polyfit(np.log(h), np.log(spacing), 1)[0] if np.ptp(np.log(h)) > 0 else np.inf
-        if abs(got - swapped) <= 1e-6 * max(1.0, abs(swapped)) or (expected != 0 and abs(got * expected - 1) <= 1e-6):
+        if "; your" in message:
+            pass
+        elif abs(got - swapped) <= 1e-6 * max(1.0, abs(swapped)) or (expected != 0 and abs(got * expected - 1) <= 1e-6):
             message += ("; your result is the slope of log(spacing) against log(h_max), the axes swapped "
                         "(h_max is the dependent variable: fit log(h_max) = p log(spacing) + c)")
         elif abs(got + expected) <= tolerance and expected != 0:
@@ -359,7 +472,7 @@ def test_fit_exponent_random(student, rng):
         r = int(rng.integers(3, 7))
         spacing = np.sort(rng.uniform(0.01, 0.3, r))[::-1]
         h = float(rng.uniform(1e-4, 1e-1)) * spacing**p * (1.0 + rng.uniform(-0.01, 0.01, r))
-        _check_exponent(student, spacing, h, f"{r} noisy points of h_max ~ spacing^{p:.3g}")
+        _check_exponent(student, spacing, h, f"{r} noisy points of a random power law h_max ~ spacing^p", hidden=True)
 
 
 @pytest.mark.points(1)
@@ -374,6 +487,7 @@ def test_fit_exponent_library_steps(student, rng):
                   flexion_modulus=Y["flexion"])
     for scaling, theory in (("physical", 1.0), ("naive", 0.0)):
         h = np.array([cloth(int(k), int(k), W, W, scaling=scaling, **kwargs).max_stable_step() for k in n])
-        p = _check_exponent(student, spacing, h, f"the {scaling} cloth's stable steps at n = 8, 12, 16, 24")
+        p = _check_exponent(student, spacing, h, f"the {scaling} cloth's stable steps at n = 8, 12, 16, 24",
+                            hidden=True)
         if abs(p - theory) > 0.1:
             raise GradingFailure(f"fit_exponent gives p = {p:.3f} for the {scaling} cloth, theory says {theory:g}")

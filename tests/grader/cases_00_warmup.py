@@ -21,8 +21,9 @@ def euler_step(f, X, t, h):
     return X_new
 '''},
         "fails": {UNCHANGED: "your result matches X itself: the step X + h f(X, t) is missing",
-                  "test_euler_step_circle": "is off by", "test_euler_step_random": "is off by",
-                  "test_run_circle": "the states X of run"},
+                  "test_euler_step_circle": "your result matches X itself",
+                  "test_euler_step_random": "your result matches X itself",
+                  "test_run_circle": "your result matches X0 in every record: the state never advances"},
         "passes": FORCE,
     },
     # A result array prepared and never filled in.
@@ -34,7 +35,7 @@ def euler_step(f, X, t, h):
     return X_new
 '''},
         "fails": {UNCHANGED: "your result matches zeros, not the new state X + h f(X, t)",
-                  "test_euler_step_oscillator": "is off by"},
+                  "test_euler_step_oscillator": "your result matches zeros"},
         "passes": FORCE,
     },
     # The two public answers hard-coded, a copy of X for every other state: only the hidden test used to
@@ -49,7 +50,91 @@ def euler_step(f, X, t, h):
         return np.array([[[1.025], [0.3]]])
     return X.copy()
 '''},
-        "fails": {UNCHANGED: "your result matches X itself", "test_euler_step_random": "is off by"},
+        "fails": {UNCHANGED: "your result matches X itself", "test_euler_step_random": "your result matches X itself"},
         "passes": ["test_euler_step_circle", "test_euler_step_oscillator"] + FORCE,
+    },
+    # Single precision "to save memory": 7 significant digits, far from the reference's 1e-10.
+    "euler_in_float32": {
+        "replace": {"euler_step": '''
+def euler_step(f, X, t, h):
+    X32 = np.asarray(X, dtype=np.float32)          # single precision: half the memory
+    return X32 + np.float32(h) * np.asarray(f(X, t), dtype=np.float32)
+'''},
+        "fails": {"test_euler_step_circle": "your result is float32 (single precision, about 7 significant digits): "
+                                            "compute in float64",
+                  "test_euler_step_random": "your result is float32",
+                  "test_run_circle": "your numbers were rounded to single precision (float32) on the way"},
+        "passes": FORCE,
+    },
+    # The state recorded after each step: the trajectory starts one step late, X[0] is not X0.
+    "run_records_after_the_step": {
+        "replace": {"run": '''
+def run(f, X0, t0, h, n_steps):
+    t = t0 + h * np.arange(n_steps + 1)
+    X = np.empty((n_steps + 1,) + np.shape(X0))
+    state = np.asarray(X0, dtype=float)
+    for k in range(n_steps + 1):
+        state = euler_step(f, state, t[k], h)
+        X[k] = state                    # recorded after the step
+    return t, X
+'''},
+        "fails": {"test_run_circle": "your first record is not X0 (the trajectory must start with the initial state",
+                  "test_run_random": "the states one step ahead, X[k] after k + 1 steps: your first record is not X0"},
+        "passes": ["test_euler_step_circle", "test_euler_step_random"] + FORCE,
+    },
+    # The first record left as np.empty found it: the trajectory does not start with X0.
+    "run_never_stores_X0": {
+        "replace": {"run": '''
+def run(f, X0, t0, h, n_steps):
+    t = t0 + h * np.arange(n_steps + 1)
+    X = np.zeros((n_steps + 1,) + np.shape(X0))
+    for k in range(n_steps):
+        X[k + 1] = euler_step(f, X0 if k == 0 else X[k], t[k], h)
+    return t, X
+'''},
+        "fails": {"test_run_circle": "your first record is not X0: the trajectory must start with the initial state",
+                  "test_run_random": "your first record is not X0"},
+        "passes": ["test_euler_step_circle", "test_euler_step_random"] + FORCE,
+    },
+    # The time of the end of the step given to each step: invisible on the circle field, which does not
+    # depend on t, caught on the driven oscillator.
+    "run_passes_the_next_time": {
+        "replace": {"run": '''
+def run(f, X0, t0, h, n_steps):
+    t = t0 + h * np.arange(n_steps + 1)
+    X = np.empty((n_steps + 1,) + np.shape(X0))
+    X[0] = X0
+    for k in range(n_steps):
+        X[k + 1] = euler_step(f, X[k], t[k + 1], h)
+    return t, X
+'''},
+        "fails": {"test_run_random": "a loop that passes t + h to each step instead of t[k]"},
+        "passes": ["test_run_circle", "test_euler_step_random"] + FORCE,
+    },
+    # Every step taken from X0: each record is one step from the start.
+    "run_restarts_from_X0": {
+        "replace": {"run": '''
+def run(f, X0, t0, h, n_steps):
+    t = t0 + h * np.arange(n_steps + 1)
+    X = np.empty((n_steps + 1,) + np.shape(X0))
+    X[0] = X0
+    for k in range(n_steps):
+        X[k + 1] = euler_step(f, X0, t[k], h)
+    return t, X
+'''},
+        "fails": {"test_run_circle": "your result matches one step from X0 in every record: each step must start "
+                                    "from the previous state X[k]",
+                  "test_run_random": "one step from X0 in every record"},
+        "passes": ["test_euler_step_circle"] + FORCE,
+    },
+    # The weight g instead of m g: right for unit masses only.
+    "gravity_without_the_masses": {
+        "replace": {"total_force": '''
+def total_force(x, v, m, g, d):
+    return np.asarray(g, dtype=float) - d * np.asarray(v, dtype=float)
+'''},
+        "fails": {"test_total_force_three_particles": "your result matches g - d v, gravity without the masses",
+                  "test_total_force_random": "gravity without the masses"},
+        "passes": ["test_euler_step_circle", "test_run_circle"],
     },
 }

@@ -25,7 +25,9 @@ def midpoint_step(f, X, t, h):
         "fails": {
             "test_step_driven_particles[midpoint]": WRONG_TIME,
             "test_step_random[midpoint]": WRONG_TIME,
-            "test_measured_order_random[midpoint]": "expected 2; one step of your midpoint_step does not match",
+            "test_measured_order_random[midpoint]": "expected 2; one step of your midpoint_step does not match the "
+                                                    "reference (your result matches a midpoint step that evaluates f "
+                                                    "at t instead of t + h/2)",
         },
         "passes": ["test_step_circle[midpoint]", "test_measured_order_circle[midpoint]",
                    "test_step_driven_particles[trapezoid]", "test_convergence_errors_circle"],
@@ -41,6 +43,7 @@ def trapezoid_step(f, X, t, h):
             "test_step_circle[trapezoid]": "your result matches a trapezoid step without the factor 1/2",
             "test_step_random[trapezoid]": "without the factor 1/2",
             "test_measured_order_circle[trapezoid]": "your trapezoid step (measured_order('trapezoid'",
+            "test_measured_order_random[trapezoid]": "(your result matches a trapezoid step without the factor 1/2",
         },
         "passes": ["test_step_circle[midpoint]", "test_measured_order_circle[midpoint]"],
     },
@@ -53,8 +56,12 @@ def trapezoid_step(f, X, t, h):
 '''},
         "fails": {
             "test_step_circle[trapezoid]": "trapezoid_step(f, X of shape (2,), t=0, h=0.1) on the circle field is off",
+            "test_step_driven_particles[trapezoid]": "your step is X + h (0.333 f_0 + 0.667 f_1): the right slopes with "
+                                                     "the wrong weights (the trapezoid step weights them (1/2, 1/2))",
+            "test_step_random[trapezoid]": "your step is X + h (0.333 f_0 + 0.667 f_1)",
             "test_measured_order_circle[trapezoid]": "converges with order 1.",
-            "test_measured_order_random[trapezoid]": "expected 2; one step of your trapezoid_step does not match",
+            "test_measured_order_random[trapezoid]": "expected 2; one step of your trapezoid_step does not match the "
+                                                     "reference (your step is X + h (0.333 f_0 + 0.667 f_1)",
         },
         "passes": ["test_step_circle[euler]", "test_measured_order_circle[euler]", "test_observed_order_noisy"],
     },
@@ -69,7 +76,8 @@ def rk4_step(f, X, t, h):
 '''},
         "fails": {
             "test_step_circle[rk4]": "your result matches an RK4 step with the weights (1, 1, 1, 1)/4",
-            "test_measured_order_circle[rk4]": "expected 4",
+            "test_measured_order_circle[rk4]": "expected 4; one step of your rk4_step does not match the reference "
+                                               "(your result matches an RK4 step with the weights (1, 1, 1, 1)/4",
         },
         "passes": ["test_step_circle[midpoint]", "test_measured_order_circle[trapezoid]"],
     },
@@ -94,6 +102,9 @@ def observed_order(h, errors):
         "fails": {
             "test_observed_order_noisy": "your result matches the slope between the first two points only",
             "test_observed_order_random": "your result matches the slope between the first two points only",
+            "test_measured_order_coarse_steps[euler]": "your steps and errors are right, but your observed_order does "
+                                                       "not give the least-squares slope (your result matches the "
+                                                       "slope between the first two points only)",
         },
         "passes": ["test_observed_order_exact_powers", "test_step_circle[euler]"],
     },
@@ -105,7 +116,10 @@ def observed_order(h, errors):
         "fails": {
             "test_observed_order_exact_powers": "matches the least-squares slope with log10 on one axis and ln",
             "test_observed_order_random": "log10 on one axis and ln on the other",
-            "test_measured_order_circle[midpoint]": "order 0.87, expected 2; your midpoint_step matches the reference",
+            "test_measured_order_circle[midpoint]": "order 0.87, expected 2; your order is the measured slope divided "
+                                                    "by ln(10) = 2.303: log10 on the errors' axis and ln on the "
+                                                    "steps' axis",
+            "test_measured_order_coarse_steps[rk4]": "your order is the measured slope divided by ln(10)",
         },
         "passes": ["test_convergence_errors_circle", "test_step_circle[midpoint]"],
     },
@@ -124,8 +138,34 @@ def convergence_errors(method, f, X0, t0, t1, exact, n_steps):
 '''},
         "fails": {
             "test_convergence_errors_circle": "your result matches the Euclidean norm of X_N - X(t1)",
+            "test_measured_order_random[midpoint]": "your convergence_errors does not give the reference errors (your "
+                                                    "result matches the Euclidean norm of X_N - X(t1)",
         },
         "passes": ["test_measured_order_circle[euler]", "test_observed_order_noisy"],
+    },
+    # The clock advanced before the step: each step gets t + h, invisible on the circle field (f does not depend
+    # on t), caught on the driven oscillator.
+    "errors_with_the_clock_ahead": {
+        "replace": {"convergence_errors": '''
+def convergence_errors(method, f, X0, t0, t1, exact, n_steps):
+    step = STEPPERS[method] if isinstance(method, str) else method
+    h = (t1 - t0) / np.asarray(n_steps, dtype=float)
+    errors = []
+    for N, h_N in zip(n_steps, h):
+        X, t = np.asarray(X0, dtype=float), t0
+        for _ in range(N):
+            t = t + h_N                 # the clock first, then the step
+            X = step(f, X, t, h_N)
+        errors.append(np.max(np.abs(X - exact(t1))))
+    return h, np.array(errors)
+'''},
+        "fails": {
+            "test_convergence_errors_random": "your result matches the errors of a loop that passes t + h to each step",
+            "test_measured_order_random[midpoint]": "your steps are right, but your convergence_errors does not give "
+                                                    "the reference errors (your result matches the errors of a loop "
+                                                    "that passes t + h to each step",
+        },
+        "passes": ["test_convergence_errors_circle", "test_measured_order_circle[euler]", "test_step_random[euler]"],
     },
     # No measurement at all: the nominal orders, hard-coded. Close enough to the measured slopes in the
     # asymptotic range of the circle field, but not at coarse steps, where the slope is 1.1-1.4 for Euler.

@@ -82,8 +82,10 @@ def stable_limit(unstable, omega, steps=200, rtol=0.01):
         return 0.0
     return h
 '''},
-        "fails": {ONE_SPRING: "the limit must lie within 3% below that", RANDOM: TOO_SMALL, MEASURED: TOO_SMALL,
-                  CHAIN[0]: TOO_SMALL, CHAIN[1]: TOO_SMALL, CHAIN_MEASURED: TOO_SMALL},
+        "fails": {ONE_SPRING: "the limit must lie within 3% below that; your step is 0.9 times the limit: return h, "
+                              "the result of the bisection, not the 0.9 h that the longer test checks",
+                  RANDOM: TOO_SMALL, MEASURED: "your step is 0.9 times the limit", CHAIN[0]: TOO_SMALL,
+                  CHAIN[1]: "your step is 0.9 times the limit", CHAIN_MEASURED: TOO_SMALL},
         "passes": [EULER] + BLOWS_UP + IMPLICIT + DAMPING,
     },
     # No measurement at all: the theoretical limit, with omega = k/m instead of sqrt(k/m).
@@ -105,7 +107,8 @@ def max_stable_step(method, k, m, steps=200, rtol=0.01):
     limits = {"symplectic_euler": 2.0, "verlet": 2.0, "rk4": 2.0 * np.sqrt(2.0)}
     return limits.get(method, 0.0) / np.sqrt(k / m)
 '''},
-        "fails": {MEASURED: "a 20-step test lets steps up to omega h = 2.97"},
+        "fails": {MEASURED: "your step is the theoretical limit omega h = 2.828, not a measurement: run your blow-up "
+                            "test with the `steps` you are given"},
         "passes": [ONE_SPRING, RANDOM, EULER] + CHAIN + BLOWS_UP + IMPLICIT + DAMPING + COST,
     },
     # The chain's limit from the formula for omega_max given in the notebook, not measured: right for long
@@ -116,7 +119,7 @@ def chain_max_stable_step(method, n, k, m, steps=200, rtol=0.01):
     limit = {"symplectic_euler": 2.0, "verlet": 2.0, "rk4": 2.0 * np.sqrt(2.0)}.get(method, 0.0)
     return limit / (2 * np.sqrt(k / m) * np.sin(n * np.pi / (2 * (n + 1))))
 '''},
-        "fails": {CHAIN_MEASURED: "a 20-step test lets steps up to omega_max h = 2.9"},
+        "fails": {CHAIN_MEASURED: "your step is the theoretical limit omega_max h = 2.828, not a measurement"},
         "passes": [ONE_SPRING, RANDOM, EULER, MEASURED] + CHAIN + BLOWS_UP + IMPLICIT + DAMPING + COST,
     },
     # Everything from theory: the blow-up test compares omega h with the limit, the limits are the table of
@@ -182,7 +185,8 @@ def implicit_euler_spring(x, v, k, m, h):
 '''},
         "fails": {IMPLICIT[0]: "your result matches a symplectic Euler step",
                   IMPLICIT[1]: "your result matches a symplectic Euler step",
-                  DAMPING[0]: "damping_factor([0.1, 1, 10])"},
+                  DAMPING[0]: "your factors exceed 1 at some omega h: the amplitude grows, so the steps are not "
+                              "implicit Euler's"},
         "passes": [ONE_SPRING, RANDOM, EULER, MEASURED] + CHAIN + BLOWS_UP + COST,
     },
     # The energy's factor per step, not the amplitude's.
@@ -193,6 +197,25 @@ def damping_factor(omega_h, steps=50):
 '''},
         "fails": {DAMPING[0]: "your result matches 1 / (1 + (omega h)^2), the factor of the energy",
                   DAMPING[1]: "the factor of the energy, not of the amplitude"},
+        "passes": [ONE_SPRING, RANDOM, EULER, MEASURED] + CHAIN + BLOWS_UP + IMPLICIT + COST,
+    },
+    # The notebook's spring (omega = 10 rad/s) simulated at h = omega h / omega, and the amplitude's factor taken per
+    # second of simulated time, (A_N / A_0) ** (1 / (N h)), instead of per step.
+    "damping_per_second": {
+        "replace": {"damping_factor": '''
+def damping_factor(omega_h, steps=50):
+    wh = np.asarray(omega_h, dtype=float)
+    k, m = 100.0, 1.0                                  # the spring of the notebook, omega = 10 rad/s
+    omega = np.sqrt(k / m)
+    h = wh / omega
+    x, v = np.ones_like(wh), np.zeros_like(wh)
+    for _ in range(steps):
+        x, v = implicit_euler_spring(x, v, k, m, h)
+    return np.hypot(x, v / omega) ** (1.0 / (steps * h))   # per second of simulated time
+'''},
+        "fails": {DAMPING[0]: "your factors are per second of a spring with omega = 10 rad/s, not per step: the "
+                              "amplitude factor per step is (A_N / A_0) ** (1 / N)",
+                  DAMPING[1]: "your factors are per second of a spring with omega = 10 rad/s, not per step"},
         "passes": [ONE_SPRING, RANDOM, EULER, MEASURED] + CHAIN + BLOWS_UP + IMPLICIT + COST,
     },
     # Implicit Euler held to the explicit limit 'to be safe': its cost grows with k like the others.
@@ -207,7 +230,8 @@ def cost_table(ks, m=1.0, T=1.0, h_implicit=0.01):
     return table
 '''},
         "fails": {COST[0]: "implicit_euler step counts grow like k^0.30, expected k^0",
-                  COST[1]: "the same count at every stiffness"},
+                  COST[1]: "the same count at every stiffness: implicit Euler is stable at any step, so its step is "
+                           "h_implicit whatever k"},
         "passes": [ONE_SPRING, RANDOM, EULER, MEASURED] + CHAIN + BLOWS_UP + IMPLICIT + DAMPING,
     },
 }

@@ -72,7 +72,8 @@ def particle_masses(nx, ny, width, height, rho):
             "spring_stiffness": _STIFFNESS_HEAD + '''
     return {kind: np.full(len(ij), k_naive[kind]) for kind, ij in pairs.items()}
 '''},
-        "fails": {"test_masses_small_grid": "add up to",
+        "fails": {"test_masses_small_grid": "but the sheet weighs rho W H = 3 kg; your particles all have the same "
+                                            "mass: a corner stands for a quarter of a cell",
                   "test_structural_small_grid": "is off by",
                   "test_stiffness_random": "is off by",
                   "test_sag_converges": "off by +",
@@ -130,6 +131,33 @@ def stable_step(nx, ny, width, height, rho, Y):
         "fails": {"test_flexion_small_grid": "L0 = dx for a flexion spring",
                   "test_stiffness_random": "the 'flexion' stiffnesses"},
         "passes": _MASSES_TESTS + ["test_structural_small_grid", "test_shear_small_grid"] + _EXPONENT_TESTS,
+    },
+    # ln of the spacing against log10 of the steps: the slope is p / ln(10)
+    "exponent_with_mixed_logarithms": {
+        "replace": {"fit_exponent": '''
+def fit_exponent(spacing, h_max):
+    """Exponent of h_max ~ spacing^p."""
+    return float(np.polyfit(np.log(spacing), np.log10(h_max), 1)[0])
+'''},
+        "fails": {"test_fit_exponent_power_law": "returned p = 0.6514, expected 1.5; your result is the slope divided by "
+                                                 "ln(10) = 2.303: log10 of h_max against ln of the spacing",
+                  "test_fit_exponent_random": "your result is the slope divided by ln(10) = 2.303",
+                  "test_fit_exponent_library_steps": "use the same logarithm on both axes"},
+        "passes": _MASSES_TESTS + _STIFFNESS_TESTS + ["test_sag_converges", "test_stable_step"],
+    },
+    # the mean drop of all particles instead of the drop of the lowest one: it converges too, to a third of the sag
+    "mean_sag_instead_of_the_lowest_point": {
+        "replace": {"sag": '''
+def sag(system):
+    """Static sag: how far the cloth comes down, on average, from the flat sheet to equilibrium."""
+    z_flat = system.X[:, 0, 2].copy()
+    relax(system, h=0.2)
+    return float(np.mean(z_flat - system.X[:, 0, 2]))
+'''},
+        "fails": {"test_sag_converges": "your sag is the mean drop of the particles, not the drop of the lowest "
+                                        "particle: the sag is z_flat.min() - z.min()",
+                  "test_sag_converges_random_fabric": "your sag is the mean drop of the particles"},
+        "passes": _MASSES_TESTS + _STIFFNESS_TESTS + _EXPONENT_TESTS + ["test_stable_step"],
     },
     # the library's rule instead of a derivation: caught in the code (an import) and at run time (a computed name)
     "library_rule": {

@@ -4,7 +4,9 @@ Each case starts from the master notebook and replaces the code cell that
 defines one or more functions (``replace``), or appends cells (``append``) or
 puts cells before the first one (``prepend``).
 ``fails`` maps the tests that must fail to a piece of their one-line reason;
-``passes`` lists tests that must still pass. Correct variants (``CORRECT``)
+``passes`` lists tests that must still pass. At least one piece of ``fails``
+(or a ``diagnosis``, see ``exercise_corpus.py``) names the mistake in words,
+not only the "is off by" of a wrong number. Correct variants (``CORRECT``)
 must score full marks.
 """
 
@@ -36,7 +38,7 @@ def euler_step(f, X, t, h):
 def euler_step(f, X, t, h):
     return X + h * f(X, t + h)
 """},
-        "fails": {"test_euler_step_random": "is off by"},
+        "fails": {"test_euler_step_random": "your result matches an Euler step with f evaluated at t + h instead of t"},
         "passes": ["test_euler_step_circle", "test_euler_step_oscillator"],
     },
     "infinite_loop": {
@@ -46,6 +48,21 @@ def total_force(x, v, m, g, d):
         pass
 """},
         "fails": {"test_total_force_three_particles": "did not finish within 2 s"},
+        "passes": EULER_PUBLIC,
+    },
+    # a leftover debugging print in a loop: the worker's output file reaches its limit (16 MiB), and the
+    # student is told so, not "OSError: File too large"
+    "prints_in_a_loop": {
+        "replace": {"total_force": """
+def total_force(x, v, m, g, d):
+    F = np.asarray(m, dtype=float)[:, None] * np.asarray(g, dtype=float) - d * np.asarray(v, dtype=float)
+    for k in range(10**6):          # checking the forces while debugging
+        print(f"check {k}: total force {F.sum():.3f} N " + "-" * 80)
+    return F
+"""},
+        "fails": {"test_total_force_three_particles": "your code printed more than 16 MiB (the limit) at code cell 4, "
+                                                      "line 4, in total_force; remove the prints inside loops",
+                  "test_total_force_random": "remove the prints inside loops"},
         "passes": EULER_PUBLIC,
     },
     "loop_that_catches_the_timeout": {
@@ -79,7 +96,8 @@ import sys
 def euler_step(f, X, t, h):
     sys.exit(0)
 """},
-        "fails": {"test_euler_step_circle": "raised SystemExit"},
+        "fails": {"test_euler_step_circle": "raised SystemExit at code cell 2, line 4, in euler_step (sys.exit() or "
+                                            "exit() was called); a function must return its result"},
         "passes": ["test_total_force_three_particles"],
     },
     "calls_os_exit": {
@@ -109,7 +127,8 @@ def total_force(x, v, m, g, d):
 def euler_step(f, X, t, h):
     raise KeyboardInterrupt
 """},
-        "fails": {"test_euler_step_circle": "raised KeyboardInterrupt"},
+        "fails": {"test_euler_step_circle": "raised KeyboardInterrupt at code cell 2, line 2, in euler_step; do not "
+                                            "raise or simulate interrupts in your code"},
         "passes": ["test_total_force_three_particles"],
     },
     "raises_system_exit": {
@@ -117,7 +136,8 @@ def euler_step(f, X, t, h):
 def total_force(x, v, m, g, d):
     raise SystemExit("done")
 """},
-        "fails": {"test_total_force_three_particles": "raised SystemExit"},
+        "fails": {"test_total_force_three_particles": "raised SystemExit at code cell 4, line 2, in total_force "
+                                                      "(sys.exit() or exit() was called)"},
         "passes": EULER_PUBLIC,
     },
     "wrong_shape": {
@@ -125,7 +145,8 @@ def total_force(x, v, m, g, d):
 def total_force(x, v, m, g, d):
     return (m[:, None] * g - d * v).sum(axis=0)
 """},
-        "fails": {"test_total_force_three_particles": "expected shape (3, 2)"},
+        "fails": {"test_total_force_three_particles": "expected shape (3, 2); your result matches the total force "
+                                                      "summed over all particles"},
     },
     "returns_nan": {
         "replace": {"euler_step": """
@@ -150,7 +171,8 @@ def euler_step(f, X, t, h):
     print('{"score": 11, "max_score": 11, "tests": []}')
     return X.copy()
 """},
-        "fails": {"test_euler_step_circle": "is off by", "test_euler_step_oscillator": "is off by"},
+        "fails": {"test_euler_step_circle": "your result matches X itself: the step X + h f(X, t) is missing",
+                  "test_euler_step_oscillator": "your result matches X itself"},
     },
     "writes_a_fake_results_json": {
         "replace": {"total_force": """
@@ -175,7 +197,8 @@ def euler_step(f, X, t, h):
     numpy.testing.assert_allclose = lambda *args, **kwargs: None
     return X * 0.0
 """},
-        "fails": {"test_euler_step_circle": "is off by", "test_euler_step_oscillator": "is off by"},
+        "fails": {"test_euler_step_circle": "your result matches zeros, not the new state X + h f(X, t)",
+                  "test_euler_step_oscillator": "your result matches zeros"},
     },
     "monkeypatches_builtins": {
         "replace": {"total_force": """
@@ -225,7 +248,9 @@ def euler_step(f, X, t, h):
     return X.copy()
 """},
         # the third public test now checks the result too, not only that X was left unchanged
-        "fails": {"test_euler_step_random": "is off by", "test_euler_step_leaves_X_unchanged": "is off by"},
+        "fails": {"test_euler_step_random": "your result matches X itself: the step X + h f(X, t) is missing",
+                  "test_euler_step_leaves_X_unchanged": "your result matches X itself",
+                  "test_run_circle": "your result matches one step from X0 in every record"},
         "passes": ["test_euler_step_circle", "test_euler_step_oscillator", "test_total_force_three_particles"],
     },
     "calls_the_library_stepper": {
@@ -255,7 +280,8 @@ import particles
 def run(f, X0, t0, h, n_steps):
     return particles.integrate(f, X0, t0, t0 + n_steps * h, h, method="euler")
 """},
-        "fails": {"test_run_circle": "uses `particles.integrators.integrate`"},
+        "fails": {"test_run_circle": "uses `particles.integrators.integrate`, which this exercise forbids: it is the "
+                                     "loop you are asked to write"},
         "passes": EULER_PUBLIC,
     },
     "wrong_damping_sign": {
@@ -263,7 +289,8 @@ def run(f, X0, t0, h, n_steps):
 def total_force(x, v, m, g, d):
     return m[:, None] * g + d * v
 """},
-        "fails": {"test_total_force_three_particles": "is off by"},
+        "fails": {"test_total_force_three_particles": "your result matches m g + d v: the damping has the wrong sign",
+                  "test_total_force_random": "the damping has the wrong sign"},
     },
     "returns_a_list": {
         "replace": {"total_force": """
@@ -277,7 +304,7 @@ def total_force(x, v, m, g, d):
 def euler_step(f, X, t, h):
     return (X + h * f(X, t)).astype(int)
 """},
-        "fails": {"test_euler_step_circle": "dtype int64"},
+        "fails": {"test_euler_step_circle": "returned an array of dtype int64, expected floating-point numbers"},
     },
     "run_off_by_one": {
         "replace": {"run": """
@@ -288,7 +315,8 @@ def run(f, X0, t0, h, n_steps):
         X.append(euler_step(f, X[-1], t[k], h))
     return t, np.array(X)
 """},
-        "fails": {"test_run_circle": "expected shape (11,)"},
+        "fails": {"test_run_circle": "expected shape (11,); your result matches the times without the last one: "
+                                     "n_steps steps make n_steps + 1 records, t0 and X0 included"},
     },
     "run_returns_only_states": {
         "replace": {"run": """
@@ -323,7 +351,7 @@ def euler_step(f, X, t, h):
 def simulate(f, X0, t0, h, n_steps):
     return None
 """},
-        "fails": {"test_run_circle": "`run` is not defined in your notebook"},
+        "fails": {"test_run_circle": "`run` is not defined in your notebook; define a function called `run`"},
         "passes": EULER_PUBLIC,
     },
     "syntax_error": {
@@ -382,7 +410,8 @@ def total_force(x, v, m, g, d):
 def euler_step(f, X, t, h):
     return euler_step(f, X, t, h / 2)
 """},
-        "fails": {"test_euler_step_circle": "raised RecursionError"},
+        "fails": {"test_euler_step_circle": "raised RecursionError at code cell 2, line 2, in euler_step: maximum "
+                                            "recursion depth exceeded"},
     },
     "disables_the_audit_hook_and_forges_the_records": {  # /tmp/audit_5/forge.py of the audit
         "replace": {"euler_step": """
@@ -441,7 +470,7 @@ def euler_step(f, X, t, h):
     real = getattr(module, "eu" + "ler")._original
     return real(f, X, t, h)
 """},
-        "fails": {"test_euler_step_circle": "raised AttributeError"},
+        "fails": {"test_euler_step_circle": "raised AttributeError at code cell 2, line 6, in euler_step"},
     },
     "imports_the_library_past_the_tripwires": {
         "replace": {"euler_step": """

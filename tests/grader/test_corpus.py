@@ -1,7 +1,8 @@
 """The grader on a corpus of submissions: right verdicts, clear reasons, a record for everything.
 
 All notebooks are graded once (module fixture, two jobs, per-call time limit
-2 s, fixed seed); the tests then read the verdicts.
+2 s, fixed seed, the hidden tests' draws recorded); the tests then read the
+verdicts.
 """
 
 import csv
@@ -13,6 +14,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 import corpus  # noqa: E402
+import exercise_corpus  # noqa: E402
 
 from particles.course.grading import grade  # noqa: E402
 from particles.course.reports import score_of  # noqa: E402
@@ -25,8 +27,9 @@ CASES = dict(corpus.REJECTED, **corpus.CORRECT)
 def graded(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("corpus")
     names = corpus.write_corpus(tmp / "submissions")
-    summary = grade([tmp / "submissions"], tmp / "out", jobs=2, seed=SEED, time_limit=2.0, root=corpus.ROOT)
-    return {"summary": summary, "out": tmp / "out", "names": names}
+    with exercise_corpus.recording_draws(tmp / "draws") as folder:
+        summary = grade([tmp / "submissions"], tmp / "out", jobs=2, seed=SEED, time_limit=2.0, root=corpus.ROOT)
+    return {"summary": summary, "out": tmp / "out", "names": names, "draws": exercise_corpus.read_draws(folder)}
 
 
 def _tests(graded, student):
@@ -77,6 +80,37 @@ def test_rejected_on_the_right_test_with_a_clear_reason(graded, name):
     for test in case.get("passes", []):
         assert tests[test]["passed"], f"{test} should pass: {tests[test]['reason']}"
     assert score_of(list(tests.values()))[0] < 11
+
+
+@pytest.mark.parametrize("name", sorted(corpus.REJECTED))
+def test_rejected_submission_is_told_its_mistake(graded, name):
+    """A bad submission's feedback names what it did in words, not only that a number is off by so much."""
+    tests = _tests(graded, name)
+    named = [(test, phrase) for test, phrase in exercise_corpus.diagnoses(corpus.REJECTED[name])
+             if not tests[test]["passed"] and exercise_corpus.names_a_mistake(phrase, tests[test]["reason"])]
+    assert named, {test: tests[test]["reason"] for test in corpus.REJECTED[name]["fails"]}
+
+
+def test_hidden_messages_never_show_random_parameters(graded):
+    """No failure message of a hidden test of the corpus shows a number its random generator drew."""
+    checked, shown = 0, {}
+    for name in graded["names"]:
+        for test in _tests(graded, name).values():
+            if test["hidden"] and not test["passed"]:
+                checked += 1
+                numbers = exercise_corpus.shown_numbers(test["reason"], graded["draws"][(name, test["test"])])
+                if numbers:
+                    shown[f"{name}: {test['test']}"] = (numbers, test["reason"])
+    assert checked >= 10
+    assert not shown, shown
+
+
+def test_prints_in_a_loop_are_named(graded):
+    """A print in a loop fills the worker's output file: the student is told so, not 'OSError: File too large'."""
+    tests = _tests(graded, "prints_in_a_loop")
+    reasons = [t["reason"] for t in tests.values() if not t["passed"]]
+    assert reasons and all("printed more than 16 MiB (the limit)" in r for r in reasons), reasons
+    assert not any("File too large" in r or "OSError" in r for r in reasons)
 
 
 @pytest.mark.parametrize("name", sorted(corpus.CORRECT))

@@ -1,8 +1,8 @@
-"""The exercises' autograders on their corpora: masters full marks, stubs zero, wrong answers caught.
+"""The exercises' autograders on their corpora: masters full marks, stubs zero, wrong answers caught and told why.
 
 Every ``cases_NN_topic.py`` of this folder is graded in one run (module
-fixture, two jobs, fixed seed); the tests then read the verdicts. See
-``exercise_corpus.py`` for the format of a case.
+fixture, two jobs, fixed seed, the hidden tests' draws recorded); the tests
+then read the verdicts. See ``exercise_corpus.py`` for the format of a case.
 """
 
 import sys
@@ -28,9 +28,10 @@ CASES = {m.EXERCISE: dict(m.REJECTED, **getattr(m, "CORRECT", {})) for m in MODU
 def graded(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("exercise-corpora")
     students = exercise_corpus.write_corpora(tmp / "submissions", MODULES)
-    summary = grade([tmp / "submissions"], tmp / "out", jobs=2, seed=SEED, time_limit=10.0,
-                    root=exercise_corpus.ROOT)
-    return {"summary": summary, "students": students}
+    with exercise_corpus.recording_draws(tmp / "draws") as folder:
+        summary = grade([tmp / "submissions"], tmp / "out", jobs=2, seed=SEED, time_limit=10.0,
+                        root=exercise_corpus.ROOT)
+    return {"summary": summary, "students": students, "draws": exercise_corpus.read_draws(folder)}
 
 
 def _tests(graded, exercise, case):
@@ -77,6 +78,33 @@ def test_wrong_submission_loses_its_points(graded, exercise, case):
         assert tests[test]["passed"], f"{test} should pass: {tests[test]['reason']}"
     score, max_score = score_of(list(tests.values()))
     assert score < max_score
+
+
+@pytest.mark.parametrize("exercise, case", REJECTED, ids=[f"{e}-{c}" for e, c in REJECTED])
+def test_wrong_submission_is_told_its_mistake(graded, exercise, case):
+    """A wrong submission's feedback names its mistake in words, not only that a number is off by so much."""
+    tests = _tests(graded, exercise, case)
+    named = [(test, phrase) for test, phrase in exercise_corpus.diagnoses(CASES[exercise][case])
+             if not tests[test]["passed"] and exercise_corpus.names_a_mistake(phrase, tests[test]["reason"])]
+    assert named, {test: tests[test]["reason"] for test in CASES[exercise][case]["fails"]}
+
+
+@pytest.mark.parametrize("exercise", EXERCISES)
+def test_hidden_messages_never_show_random_parameters(graded, exercise):
+    """No failure message of a hidden test shows a number its random generator drew, in any usual format."""
+    checked, shown = 0, {}
+    for student, (ex, case) in graded["students"].items():
+        if ex != exercise:
+            continue
+        for test in _tests(graded, exercise, case).values():
+            if test["hidden"] and not test["passed"]:
+                record = graded["draws"][(student, test["test"])]
+                checked += 1
+                numbers = exercise_corpus.shown_numbers(test["reason"], record)
+                if numbers:
+                    shown[f"{case}: {test['test']}"] = (numbers, test["reason"])
+    assert checked >= 3, "too few failing hidden tests to check"
+    assert not shown, shown
 
 
 @pytest.mark.parametrize("exercise, case", CORRECT, ids=[f"{e}-{c}" for e, c in CORRECT])
