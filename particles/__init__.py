@@ -1,18 +1,21 @@
 """particles: a course package for particle systems and mass-spring simulation.
 
-The reference library follows the lecture's animation loop: a state ``X`` of
-shape ``(n, 2, d)`` (positions and velocities), forces that add into a force
-array, and ODE steppers ``step(f, X, t, h)``. On top of it: collisions with
-implicit surfaces (:mod:`particles.collisions`), emitters and particle
-effects with lifetimes (:mod:`particles.emitters`, :mod:`particles.effects`),
-flocks (:mod:`particles.flocking`), mass-spring models with Provot's
-constraint, implicit solvers and cloth self-collision
-(:mod:`particles.massspring`, :mod:`particles.constraints`,
-:mod:`particles.implicit`, :mod:`particles.selfcollision`), molecular dynamics
-in a periodic box (:mod:`particles.periodic`, :mod:`particles.thermostats`,
+The reference library follows the lecture's animation loop, and has one
+time loop, :meth:`ParticleSystem.run`: a state ``X`` of shape ``(n, 2, d)``
+(positions and velocities), forces that add into a force array
+(:mod:`particles.forces`), and ODE steppers ``step(f, X, t, h)`` or solver
+objects ``solver.step(X, t, h)`` (:mod:`particles.steppers`). On top of it:
+collisions with implicit surfaces (:mod:`particles.collisions`), emitters and
+particle effects with lifetimes (:mod:`particles.emitters`,
+:mod:`particles.effects`, colours in :mod:`particles.colours`), flocks
+(:mod:`particles.flocking`), mass-spring models with Provot's constraint,
+implicit solvers and cloth self-collision (:mod:`particles.massspring`,
+:mod:`particles.constraints`, :mod:`particles.implicit`,
+:mod:`particles.selfcollision`), molecular dynamics in a periodic box
+(:mod:`particles.periodic`, :mod:`particles.thermostats`,
 :mod:`particles.liquids`, :mod:`particles.statistics`) and drawing
 (:mod:`particles.render`, imported on demand because it loads Matplotlib's
-pyplot).
+pyplot). ``CONTRIBUTING.md`` describes the layout and the data flow of a step.
 
 >>> import particles
 >>> from particles.forces import Gravity, Damping
@@ -20,8 +23,9 @@ pyplot).
 >>> t, X = ps.run(0.5, h=0.01, method="verlet")
 """
 
-from . import (collisions, constraints, effects, emitters, flocking, forces, implicit, integrators, liquids,
-               massspring, neighbors, periodic, selfcollision, springs, statistics, surfaces, thermostats)
+from . import (collisions, colours, constraints, effects, emitters, flocking, forces, implicit, integrators,
+               liquids, massspring, neighbors, periodic, selfcollision, springs, statistics, steppers, surfaces,
+               thermostats)
 from .collisions import Collider
 from .effects import ParticleEffect
 from .errors import ConvergenceError, SimulationDiverged
@@ -50,6 +54,7 @@ __all__ = [
     "Flock",
     "check",
     "constraints",
+    "colours",
     "forces",
     "implicit",
     "integrators",
@@ -66,4 +71,5 @@ __all__ = [
     "thermostats",
     "statistics",
     "liquids",
+    "steppers",
 ]

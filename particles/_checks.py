@@ -4,7 +4,10 @@ import numbers
 
 import numpy as np
 
-__all__ = ["as_float_array", "positive_number", "nonnegative_number", "method_name"]
+__all__ = [
+    "as_float_array", "positive_number", "nonnegative_number", "method_name", "count", "finite_real", "end_time",
+    "pinned_indices", "index_array", "per_item", "mass_array", "restitution_coefficient",
+]
 
 
 def as_float_array(value, name, shape=None, ndim=None, finite=True):
@@ -104,3 +107,71 @@ def end_time(t_end, t, owner="system"):
     if t_end < t:
         raise ValueError(f"t_end must be >= the current time t = {t!r} s of the {owner}, got {t_end!r}")
     return t_end
+
+
+def pinned_indices(pinned, n):
+    """Sorted unique particle indices from indices or a boolean mask of length `n`, checked.
+
+    Parameters
+    ----------
+    pinned : array_like of int or bool
+        Indices (negative ones count from the end) or a mask of shape (n,).
+    n : int
+        Number of particles.
+
+    Returns
+    -------
+    ndarray of int, shape (p,)
+    """
+    p = np.asarray(pinned)
+    if p.dtype == bool:
+        if p.shape != (n,):
+            raise ValueError(f"pinned as a boolean mask must have shape ({n},), got {p.shape}")
+        return np.flatnonzero(p)
+    if p.size == 0:
+        return np.zeros(0, dtype=int)
+    if p.ndim != 1 or not np.issubdtype(p.dtype, np.integer):
+        raise ValueError(f"pinned must be a list of particle indices or a boolean mask, got {pinned!r}")
+    if np.any((p < -n) | (p >= n)):
+        raise ValueError(f"pinned indices must lie in [0, {n}), got {p.tolist()}")
+    return np.unique(p % n)
+
+
+def index_array(value, name, width):
+    """Particle indices of shape (s, width) (pairs of a spring, triples of a joint), all >= 0, as int64."""
+    a = np.asarray(value)
+    if a.size == 0:
+        return np.zeros((0, width), dtype=np.int64)
+    if a.ndim != 2 or a.shape[1] != width or not np.issubdtype(a.dtype, np.integer):
+        raise ValueError(f"{name} must be an integer array of shape (s, {width}), got {a.dtype} {a.shape}")
+    if np.any(a < 0):
+        raise ValueError(f"{name} must hold particle indices >= 0")
+    return a.astype(np.int64)
+
+
+def per_item(value, name, size, positive=False):
+    """A number or an array of length `size` (one value per spring, joint, ...), >= 0 (> 0), as a float array."""
+    a = as_float_array(value, name, ndim=(0, 1))
+    if a.ndim == 1 and a.shape != (size,):
+        raise ValueError(f"{name} must be a number or have shape ({size},), got shape {a.shape}")
+    if np.any(a < 0) or (positive and np.any(a == 0)):
+        raise ValueError(f"{name} must be {'> 0' if positive else '>= 0'}")
+    return np.broadcast_to(a, (size,)).copy()
+
+
+def mass_array(m, n):
+    """Masses as a read-only array of shape (n,), from a number or an array of shape (n,), all > 0 kg."""
+    m = as_float_array(m, "m")
+    if m.shape not in ((), (n,)):
+        raise ValueError(f"m must be a number or have shape ({n},), got shape {m.shape}")
+    if np.any(m <= 0):
+        raise ValueError("m must be positive: every mass must be > 0 kg")
+    return np.broadcast_to(m, (n,))
+
+
+def restitution_coefficient(value):
+    """A coefficient of restitution ``eps`` in [0, 1] (1: elastic, 0: no bounce)."""
+    eps = nonnegative_number(value, "restitution")
+    if eps > 1:
+        raise ValueError(f"restitution must lie in [0, 1] (1: elastic, 0: no bounce), got {value!r}")
+    return eps

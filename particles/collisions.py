@@ -45,12 +45,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._checks import as_float_array, method_name, nonnegative_number, positive_number
-from .errors import SimulationDiverged
-from .integrators import INTEGRATORS, step_times
+from ._checks import (as_float_array, mass_array, nonnegative_number, pinned_indices, positive_number,
+                      restitution_coefficient)
 from .crossing import cubic_path, first_crossing, hermite, hermite_coefficients, path_speed
+from .steppers import after
 from .surfaces import Box, Complement, Intersection, Plane, Sphere, Surface, Union
-from .system import _pinned_indices
 
 __all__ = [
     "Plane", "Sphere", "Box", "Union", "Intersection", "Complement", "Surface",
@@ -108,7 +107,7 @@ def respond(v, n, restitution=1.0, friction=0.0):
         k = int(np.argmax(wrong))
         raise ValueError(f"n must be unit normals (|n| = 1 within {UNIT_TOL:g}), got |n| = {length[k]:.6g} "
                          f"in row {k}; divide n by its length first")
-    return _respond(v, n, _restitution(restitution), nonnegative_number(friction, "friction"))
+    return _respond(v, n, restitution_coefficient(restitution), nonnegative_number(friction, "friction"))
 
 
 def _respond(v, n, eps, mu):
@@ -204,13 +203,6 @@ class Contacts:
         return self.impulse.sum(axis=0) + self.friction.sum(axis=0)
 
 
-def _restitution(value):
-    eps = nonnegative_number(value, "restitution")
-    if eps > 1:
-        raise ValueError(f"restitution must lie in [0, 1] (1: elastic, 0: no bounce), got {value!r}")
-    return eps
-
-
 class Collider:
     """Collisions of particles with one implicit surface, applied after each step.
 
@@ -256,7 +248,7 @@ class Collider:
         if not isinstance(surface, Surface):
             raise ValueError(f"surface must be a Surface (Plane, Sphere, Box, ...), got {type(surface).__name__}")
         self.surface = surface
-        self.restitution = _restitution(restitution)
+        self.restitution = restitution_coefficient(restitution)
         self.friction = nonnegative_number(friction, "friction")
         if method not in METHODS:
             raise ValueError(f"unknown method {method!r}; expected one of {', '.join(map(repr, METHODS))}")
@@ -277,7 +269,7 @@ class Collider:
     def _free(self, n, pinned):
         """Mask of the particles that collide: all but the pinned ones (indices or a mask)."""
         free = np.ones(n, dtype=bool)
-        free[_pinned_indices(pinned, n)] = False
+        free[pinned_indices(pinned, n)] = False
         return free
 
     def resolve(self, x, v, m=1.0, pinned=(), t=0.0):
@@ -302,7 +294,7 @@ class Collider:
         """
         x = np.array(as_float_array(x, "x", ndim=2), order="K")
         v = np.array(as_float_array(v, "v", shape=x.shape), order="K")
-        m = _masses(m, len(x))
+        m = mass_array(m, len(x))
         return self._project(x, v, m, self._free(len(x), pinned), float(t))
 
     def _project(self, x, v, m, free, t):
@@ -355,7 +347,7 @@ class Collider:
             raise ValueError(f"X_old and X_new must have the same shape, got {X_old.shape} and {X_new.shape}")
         h = positive_number(h, "h", "seconds")
         free = self._free(len(X_new), pinned)
-        m = _masses(m, len(X_new))
+        m = mass_array(m, len(X_new))
         return self._collide(X_old, X_new.copy(order="K"), float(t), h, m, free)
 
     def _collide(self, X_old, X, t, h, m, free):
@@ -450,29 +442,38 @@ class Collider:
 
         Parameters
         ----------
-        step : callable
-            A stepper ``step(f, X, t, h)`` (a name of
-            :data:`particles.integrators.INTEGRATORS` is accepted too).
+        step : str, callable or solver
+            A stepper ``step(f, X, t, h)``, a name of
+            :data:`particles.integrators.INTEGRATORS` or a solver object
+            (see :mod:`particles.steppers`).
         m : float or array_like, shape (n,)
             Masses, in kg (for the reported impulses).
         pinned : array_like of int or bool
             Particles left untouched.
-        """
-        step = method_name(step, INTEGRATORS)
 
-        def with_collisions(f, X, t, h, **options):
-            X_new = step(f, X, t, h, **options)
-            X_new, with_collisions.contacts = self.collide(X, X_new, t, h, m=m, pinned=pinned)
+        Returns
+        -------
+        callable
+            A stepper ``(f, X, t, h) -> X_new`` with the order and layout of
+            `step`, and ``contacts``: the :class:`Contacts` of its latest step.
+        """
+        def collide(X_old, X_new, t, h):
+            X_new, fixed.contacts = self.collide(X_old, X_new, t, h, m=m, pinned=pinned)
             return X_new
 
-        with_collisions.contacts = Contacts.empty(self.surface.d)
-        for attr in ("order", "explicit", "second_order_layout"):
-            setattr(with_collisions, attr, getattr(step, attr, None))
-        with_collisions.__name__ = f"collisions({getattr(step, '__name__', type(step).__name__)})"
-        return with_collisions
+        fixed = after(step, collide, "collisions")
+        fixed.contacts = Contacts.empty(self.surface.d)
+        return fixed
 
     def run(self, system, t_end, h, method="verlet", every=1):
         """Simulate a :class:`particles.ParticleSystem` with collisions after every step.
+
+        A thin wrapper of :meth:`particles.ParticleSystem.run` with the
+        stepper of :meth:`stepper`, collecting the contacts of every step::
+
+            step = collider.stepper(method, m=system.m, pinned=system.pinned)
+            t, X = system.run(t_end, h, method=step, every=every,
+                              between_steps=lambda system, t0: found.append(step.contacts))
 
         Parameters
         ----------
@@ -482,8 +483,8 @@ class Collider:
             End time, in seconds.
         h : float
             Time step, in seconds (the last step is shortened to land on `t_end`).
-        method : str or callable
-            The stepper (see :data:`particles.integrators.INTEGRATORS`).
+        method : str, callable or solver
+            What takes each step (see :mod:`particles.steppers`).
         every : int
             Record every `every`-th state (first and last always recorded).
 
@@ -493,27 +494,18 @@ class Collider:
         X : ndarray, shape (K, n, 2, d)
         contacts : Contacts
             All contacts of the run.
+
+        Raises
+        ------
+        SimulationDiverged
+            As :meth:`particles.ParticleSystem.run`; the system keeps the
+            state at the start of the failing step.
         """
-        every = _count(every, "every")
-        step = method_name(method, INTEGRATORS)
-        times = step_times(system.t, t_end, h)
-        keep = set(range(0, len(times), every)) | {len(times) - 1}
-        free, m = self._free(system.n, system.pinned), system.m
-        t_out, X_out, found = [times[0]], [system.state()], []
-        for k in range(1, len(times)):  # a loop over time steps
-            X_old, h_k = system.X, times[k] - times[k - 1]
-            with np.errstate(over="ignore", invalid="ignore"):  # a blow-up is reported below
-                X_new = np.array(step(system.derivative, X_old, times[k - 1], h_k), order="F")
-                X_new, contacts = self._collide(X_old, X_new, times[k - 1], h_k, m, free)
-            if not np.all(np.isfinite(X_new)):
-                raise SimulationDiverged(k, times[k - 1], h_k, str(method))
-            system.X = X_new
-            system.t = float(times[k])
-            found.append(contacts)
-            if k in keep:
-                t_out.append(times[k])
-                X_out.append(system.state())
-        return np.array(t_out), np.stack(X_out), Contacts.concatenate(found, system.d)
+        step = self.stepper(method, m=system.m, pinned=system.pinned)
+        found = []
+        t, X = system.run(t_end, h, method=step, every=every,
+                          between_steps=lambda system, t0: found.append(step.contacts))
+        return t, X, Contacts.concatenate(found, system.d)
 
 
 def _changed(dv_n, dv_t):
@@ -553,16 +545,6 @@ def _push_directions(surface, x, p):
     if not ok.all():
         n[~ok] = surface.normal(x[~ok])
     return n
-
-
-def _masses(m, n):
-    """Masses as shape (n,), from a number or an array of shape (n,), all > 0 kg."""
-    m = as_float_array(m, "m")
-    if m.shape not in ((), (n,)):
-        raise ValueError(f"m must be a number or have shape ({n},), got shape {m.shape}")
-    if np.any(m <= 0):
-        raise ValueError("m must be positive: every mass must be > 0 kg")
-    return np.broadcast_to(m, (n,))
 
 
 def _count(value, name):

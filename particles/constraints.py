@@ -30,9 +30,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._checks import as_float_array, count, nonnegative_number
-from .forces import pair_differences
-from .springs import _indices, _unit
+from ._checks import as_float_array, count, index_array, nonnegative_number
+from ._vectors import unit
+from .pairs import pair_differences
+from .steppers import after
 
 __all__ = ["ProvotConstraint", "ProjectionResult", "provot_projection", "color_springs"]
 
@@ -86,7 +87,7 @@ def color_springs(indices, n, seed=0):
     list of ndarray of int
         Spring numbers of each group; together they cover every spring once.
     """
-    ij = _indices(indices, "indices", 2)
+    ij = index_array(indices, "indices", 2)
     i, j = ij[:, 0], ij[:, 1]
     priority = np.random.default_rng(seed).permutation(len(ij)).astype(float)
     remaining = np.ones(len(ij), dtype=bool)
@@ -140,7 +141,7 @@ def provot_projection(x, indices, rest_length, free, max_strain=0.1, iterations=
     ProjectionResult
     """
     x = as_float_array(x, "x", ndim=2)
-    ij = _indices(indices, "indices", 2)
+    ij = index_array(indices, "indices", 2)
     i, j = ij[:, 0], ij[:, 1]
     L0 = as_float_array(rest_length, "rest_length", shape=(len(ij),))
     free = np.asarray(free, dtype=bool)
@@ -171,14 +172,14 @@ def provot_projection(x, indices, rest_length, free, max_strain=0.1, iterations=
 
 
 def _strain(x, i, j, L0):
-    L, _ = _unit(pair_differences(x, i, j))
+    L, _ = unit(pair_differences(x, i, j))
     return L / L0 - 1.0
 
 
 def _correct(x, i, j, L0, wi, wj, movable, limit, free, average):
     """One correction of the springs (i, j) that are too long, in place."""
     n = len(x)
-    L, u = _unit(pair_differences(x, i, j))
+    L, u = unit(pair_differences(x, i, j))
     too_long = movable & (L > limit * L0)
     if not too_long.any():
         return
@@ -232,7 +233,7 @@ class ProvotConstraint:
 
     def __init__(self, indices, rest_length, n, pinned=(), max_strain=0.1, iterations=500, tol=0.005,
                  method="jacobi"):
-        self.indices = _indices(indices, "indices", 2)
+        self.indices = index_array(indices, "indices", 2)
         self.rest_length = as_float_array(rest_length, "rest_length", shape=(len(self.indices),))
         n = count(n, "n", 1)
         if len(self.indices) and self.indices.max() >= n:
@@ -266,22 +267,30 @@ class ProvotConstraint:
                                  self.iterations, self.tol, self.groups)
 
     def stepper(self, step):
-        """Wrap a stepper so that every step ends with the projection.
+        """Wrap a method so that every step ends with the projection.
 
-        Returns a stepper ``(f, X, t, h) -> X_new`` with the order and layout
-        attributes of `step`; positions are projected and velocities corrected
-        by the same displacement divided by ``h``.
+        Parameters
+        ----------
+        step : str, callable or solver
+            A stepper ``step(f, X, t, h)``, a name of
+            :data:`particles.integrators.INTEGRATORS` or a solver object
+            (see :mod:`particles.steppers`).
+
+        Returns
+        -------
+        callable
+            A stepper ``(f, X, t, h) -> X_new`` with the order and layout
+            attributes of `step`; positions are projected and velocities
+            corrected by the same displacement divided by ``h``. Each step
+            appends a :class:`ProjectionResult` (without positions) to
+            :attr:`history`.
         """
 
-        def constrained(f, X, t, h, **options):
-            X_new = step(f, X, t, h, **options)
+        def project(X_old, X_new, t, h):
             result = self.project(X_new[:, 0])
             self.history.append(ProjectionResult(None, result.max_strain, result.iterations, result.converged))
             X_new[:, 1] += (result.x - X_new[:, 0]) / h
             X_new[:, 0] = result.x
             return X_new
 
-        for attr in ("order", "explicit", "second_order_layout"):
-            setattr(constrained, attr, getattr(step, attr, None))
-        constrained.__name__ = f"provot({getattr(step, '__name__', type(step).__name__)})"
-        return constrained
+        return after(step, project, "provot")

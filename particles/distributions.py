@@ -20,6 +20,7 @@ import numpy as np
 from ._checks import as_float_array, nonnegative_number, positive_number
 
 __all__ = ["Point", "Disk", "SphereSurface", "Cone", "vary"]
+# mean_and_spread, lifetime_range and position_at are public for particles.emitters, which shares them
 
 
 def vary(rng, mean, spread, n):
@@ -27,8 +28,20 @@ def vary(rng, mean, spread, n):
     return mean + spread * rng.uniform(-1.0, 1.0, n) if spread else np.full(n, float(mean))
 
 
-def _mean_spread(value, name, unit):
-    """A number, or a pair (mean, spread) with 0 <= spread <= mean."""
+def mean_and_spread(value, name, unit):
+    """Reeves' ``(mean, spread)`` from a number or a pair, checked: ``0 <= spread <= mean``.
+
+    Parameters
+    ----------
+    value : float or (float, float)
+        A number (spread 0) or the pair.
+    name, unit : str
+        For the error messages.
+
+    Returns
+    -------
+    (float, float)
+    """
     pair = np.atleast_1d(as_float_array(value, name, ndim=(0, 1)))
     if pair.shape not in ((1,), (2,)):
         raise ValueError(f"{name} must be a number or a pair (mean, spread), got {value!r}")
@@ -39,15 +52,40 @@ def _mean_spread(value, name, unit):
     return mean, spread
 
 
-def _lifetime(value):
-    """A lifetime: None or inf (forever), a number, or a pair (mean, spread), in seconds."""
+def lifetime_range(value):
+    """A lifetime as ``(mean, spread)`` in seconds, from None or inf (forever), a number or a pair.
+
+    Parameters
+    ----------
+    value : None, float or (float, float)
+
+    Returns
+    -------
+    (float, float)
+        ``(inf, 0)`` for a particle that lives forever.
+    """
     if value is None or (np.ndim(value) == 0 and value == np.inf):
         return np.inf, 0.0
-    return _mean_spread(value, "lifetime", "seconds")
+    return mean_and_spread(value, "lifetime", "seconds")
 
 
-def _at(center, t, d=None):
-    """A point, or a function of time ``center(t)``, evaluated at times `t` (shape (n,)): (n, d)."""
+def position_at(center, t, d=None):
+    """A point, or a function of time ``center(t)``, evaluated at times `t`.
+
+    Parameters
+    ----------
+    center : ndarray, shape (d,), or callable
+        A fixed point (m) or ``center(t)`` vectorized over an array of times.
+    t : ndarray, shape (n,)
+        Times, in seconds.
+    d : int, optional
+        The dimension `center(t)` must have.
+
+    Returns
+    -------
+    ndarray, shape (n, d)
+        The point at each time, in metres (a read-only broadcast for a fixed point).
+    """
     if not callable(center):
         return np.broadcast_to(center, (len(t), len(center)))
     p = np.asarray(center(t), dtype=float)
@@ -95,7 +133,7 @@ class Point:
 
     def __init__(self, center):
         self.center = _point(center, "center")
-        self.d = _at(self.center, np.zeros(1)).shape[1]
+        self.d = position_at(self.center, np.zeros(1)).shape[1]
 
     def sample(self, rng, t):
         """Positions of particles born at times `t`: the point (where it is at each time).
@@ -112,7 +150,7 @@ class Point:
         ndarray, shape (n, d)
             Positions, in metres, all at the centre.
         """
-        return np.array(_at(self.center, t))
+        return np.array(position_at(self.center, t))
 
     def normal(self, x, t):
         """The normal used by ``axis="normal"`` of an emitter: a point has none.
@@ -167,7 +205,7 @@ class Disk(Point):
         ndarray, shape (n, d)
             Positions, in metres, within `radius` of the centre at each birth time.
         """
-        c = _at(self.center, t)
+        c = position_at(self.center, t)
         n, d = c.shape
         r = self.radius * np.sqrt(rng.random(n))  # sqrt: uniform per unit area
         phi = 2 * np.pi * rng.random(n)
@@ -248,7 +286,7 @@ class SphereSurface(Point):
         ndarray, shape (n, d)
             Positions, in metres, at distance `radius` from the centre at each birth time.
         """
-        c = _at(self.center, t)
+        c = position_at(self.center, t)
         n, d = c.shape
         if self.polar is None:
             lo, hi = np.zeros(n), np.full(n, np.pi)
@@ -285,7 +323,7 @@ class SphereSurface(Point):
         ndarray, shape (n, d)
             Unit vectors away from the centre.
         """
-        r = x - _at(self.center, t)
+        r = x - position_at(self.center, t)
         return r / np.linalg.norm(r, axis=1)[:, None]
 
 
@@ -314,7 +352,7 @@ class Cone:
         self.direction = as_float_array(direction, "direction", ndim=1)
         if not np.any(self.direction):
             raise ValueError("direction must be a non-zero vector")
-        self.speed, self.spread = _mean_spread((speed, spread), "speed", "m/s")
+        self.speed, self.spread = mean_and_spread((speed, spread), "speed", "m/s")
         self.angle = nonnegative_number(angle, "angle", "radians")
         if self.angle > np.pi:
             raise ValueError(f"angle must lie in [0, pi] radians, got {angle!r}")

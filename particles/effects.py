@@ -9,15 +9,21 @@ a child effect's :class:`particles.emitters.ParticleEmitter` can use the
 particles of its parent as emitters (Reeves' hierarchical systems, the
 Genesis effect; the sparks of a firework).
 
-One step of the whole tree, from ``t`` to ``t + h``:
+One step of the whole tree, from ``t`` to ``t + h``, is one step of the
+root's :meth:`particles.ParticleSystem.run`, the library's one loop:
 
-1. every effect moves its particles (one step of its ODE stepper, then
-   collisions, if any);
-2. parents first, every emitter adds the particles born during the step,
-   each advanced by the part of the step it has lived;
-3. every effect removes its dead particles.
+1. the root moves its particles with its stepper (one step of its ODE
+   method, then collisions, if any: :attr:`ParticleEffect.stepper`);
+2. then, in the run's ``between_steps`` hook (:meth:`ParticleEffect.between_steps`),
+   every child moves its particles the same way (a one-step run of its own
+   system), parents first every emitter adds the particles born during the
+   step, each advanced by the part of the step it has lived, and every
+   effect removes its dead particles.
 
-Births and deaths are array operations; no Python loop runs over particles.
+Births and deaths are array operations (:meth:`particles.ParticleSystem.add_particles`,
+:meth:`particles.ParticleSystem.remove_particles`); no Python loop runs
+over particles. Colours come from :mod:`particles.colours`, which does not
+need Matplotlib.
 
 References
 ----------
@@ -29,71 +35,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._checks import as_float_array, end_time, method_name, positive_number
+from ._checks import as_float_array, end_time, positive_number
 from .collisions import Collider
+from .colours import ColorRamp
 from .emitters import LIFE_TOL, Emitter, ParticleEmitter
 from .errors import SimulationDiverged
-from .integrators import INTEGRATORS, step_times
+from .steppers import as_stepper
 from .system import ParticleSystem
 
-__all__ = ["ColorRamp", "Snapshot", "ParticleEffect"]
-
-
-class ColorRamp:
-    """Colour and transparency as functions of age, by linear interpolation between stops.
-
-    Parameters
-    ----------
-    colors : sequence of colors
-        Matplotlib colours (names, hex strings, RGB tuples) spread evenly
-        over the relative age ``a = age / lifetime`` from 0 to 1.
-    alphas : sequence of float
-        Opacities in [0, 1], spread evenly over ``a`` the same way
-        (default: from opaque to fully transparent, old particles fade).
-    duration : float, optional
-        Measure age in units of `duration` seconds instead of each
-        particle's lifetime (for particles that live forever).
-
-    Examples
-    --------
-    >>> ramp = ColorRamp(["white", "red"], alphas=[1.0, 0.0])
-    >>> ramp(np.array([0.0, 0.5, 1.0])).tolist()
-    [[1.0, 1.0, 1.0, 1.0], [1.0, 0.5, 0.5, 0.5], [1.0, 0.0, 0.0, 0.0]]
-    """
-
-    def __init__(self, colors=("white",), alphas=(1.0, 0.0), duration=None):
-        from matplotlib.colors import to_rgb
-
-        try:
-            self.colors = np.array([to_rgb(c) for c in colors])
-        except (ValueError, TypeError):
-            raise ValueError(f"colors must be a list of Matplotlib colours, got {colors!r}") from None
-        self.alphas = as_float_array(alphas, "alphas", ndim=1)
-        if len(self.colors) == 0 or len(self.alphas) == 0:
-            raise ValueError("colors and alphas need at least one stop each")
-        if np.any((self.alphas < 0) | (self.alphas > 1)):
-            raise ValueError(f"alphas must lie in [0, 1], got {self.alphas.tolist()}")
-        self.duration = None if duration is None else positive_number(duration, "duration", "seconds")
-
-    def __call__(self, a):
-        """RGBA, shape (n, 4), for relative ages `a` (shape (n,), clipped to [0, 1])."""
-        a = np.clip(np.asarray(a, dtype=float), 0.0, 1.0)
-        rgba = np.empty((len(a), 4))
-        stops = np.linspace(0.0, 1.0, len(self.colors))
-        for c in range(3):  # a loop over the colour channels
-            rgba[:, c] = np.interp(a, stops, self.colors[:, c])
-        rgba[:, 3] = np.interp(a, np.linspace(0.0, 1.0, len(self.alphas)), self.alphas)
-        return rgba
-
-    def relative(self, age, lifetime):
-        """Relative ages in [0, 1] from ages and lifetimes in seconds (shape (n,) each)."""
-        span = np.broadcast_to(lifetime if self.duration is None else self.duration, np.shape(age))
-        a = np.divide(age, span, out=np.zeros(len(age)), where=np.isfinite(span) & (span > 0))
-        return np.clip(a, 0.0, 1.0)
-
-    def of(self, age, lifetime):
-        """RGBA for ages and lifetimes in seconds (shape (n,) each)."""
-        return self(self.relative(age, lifetime))
+__all__ = ["ColorRamp", "Snapshot", "ParticleEffect"]  # ColorRamp lives in particles.colours
 
 
 @dataclass
@@ -164,8 +114,7 @@ class ParticleEffect:
         and ``emitter`` are in ``system.attributes``.
     children : list of ParticleEffect
     steps : int
-        Steps this effect has taken as the root of its tree (they number the
-        step of a :class:`particles.SimulationDiverged`).
+        Steps this effect has taken as the root of its tree.
 
     Examples
     --------
@@ -203,10 +152,10 @@ class ParticleEffect:
             raise ValueError(f"size must be a positive number or a pair (start, end) in points^2, got {size!r}")
         self.size = sizes if len(sizes) == 2 else np.repeat(sizes, 2)
         self.method = method
-        self._step = method_name(method, INTEGRATORS)
+        self._step = as_stepper(method)
         self.rng = np.random.default_rng(seed)
         self.name = str(name)
-        self.steps = 0
+        self.steps = self._run_steps = 0
         self.emitters, self.children = [], []
         for emitter in emitters:
             self.add_emitter(emitter)
@@ -238,7 +187,7 @@ class ParticleEffect:
         """Make `effect` step after this one (its emitters may use this effect's particles); returns it."""
         if not isinstance(effect, ParticleEffect) or effect is self:
             raise ValueError("effect must be another ParticleEffect")
-        effect.system.t = self.t
+        effect.system.set_state(t=self.t)
         self.children.append(effect)
         return effect
 
@@ -266,6 +215,70 @@ class ParticleEffect:
         """Marker areas of the live particles, in points^2, shape (n,)."""
         return self.size[0] + (self.size[1] - self.size[0]) * self.relative_age()
 
+    def stepper(self, f, X, t, h):
+        """One step of this effect's particles: its ODE method, then its collisions (newborns excluded).
+
+        A stepper of the library's form, for :meth:`particles.ParticleSystem.run`.
+
+        Parameters
+        ----------
+        f : callable
+            ``f(X, t)``: the derivative of :attr:`system`.
+        X : ndarray, shape (n, 2, d)
+            Positions (m) and velocities (m/s) of the live particles. Not modified.
+        t, h : float
+            Time and time step, in seconds.
+
+        Returns
+        -------
+        ndarray, shape (n, 2, d)
+        """
+        if len(X) == 0:
+            return X.copy(order="K")
+        X_new = self._step(f, X, t, h)
+        if self.collider is None or not np.isfinite(X_new).all():  # a blow-up: the run reports it
+            return X_new
+        X_new, _ = self.collider.collide(X, X_new, t, h, m=self.system.m)
+        return X_new
+
+    def between_steps(self, system, t0):
+        """The hook of the root's run: move the children, emit (parents first), remove the dead.
+
+        Parameters
+        ----------
+        system : ParticleSystem
+            The root's system, at the end of the step (``system.t``).
+        t0 : float
+            The start of the step, in seconds.
+        """
+        t1 = system.t
+        self.steps += 1
+        self._run_steps += 1
+        effects = list(self.tree())
+        for effect in effects[1:]:  # a loop over the child effects: one step of each
+            try:
+                effect.system.run(t1, t1 - t0, method=effect.stepper)
+            except SimulationDiverged as error:
+                raised = SimulationDiverged(self._run_steps, t0, t1 - t0, error.method,
+                                            f"(in the effect {effect.name!r})")
+                raised.effect = effect.name
+                raise raised from error
+        for effect in effects:
+            effect._emit(t0, t1)
+        for effect in effects:
+            effect._cull(t1)
+
+    def _run(self, t_end, h, every, record):
+        """The root's :meth:`particles.ParticleSystem.run` with the tree's stepper and hook."""
+        self._run_steps = 0
+        try:
+            return self.system.run(t_end, h, method=self.stepper, every=every, between_steps=self.between_steps,
+                                   record=record)
+        except SimulationDiverged as error:
+            if getattr(error, "effect", None) is None:
+                error.args, error.effect = (f"{error} (in the effect {self.name!r})",), self.name
+            raise
+
     def step(self, h):
         """Advance the whole tree by `h` seconds: move, emit (parents first), remove the dead.
 
@@ -277,37 +290,11 @@ class ParticleEffect:
         Raises
         ------
         SimulationDiverged
-            When the step makes the state of an effect non-finite; it names
-            the step (counted in :attr:`steps`, 1 = the first), its start time
-            and the effect.
+            When the step makes the state of an effect blow up; it names the
+            effect.
         """
-        h = positive_number(h, "h", "seconds")
-        t0, t1 = self.t, self.t + h
-        effects = list(self.tree())
-        step = self.steps + 1
-        for effect in effects:  # a loop over effects
-            effect._move(t0, h, step)
-        for effect in effects:
-            effect._emit(t0, t1)
-        for effect in effects:
-            effect._cull(t1)
-        self.steps = step
-
-    def _move(self, t0, h, step):
-        """Step 'step' of the tree (1 = its first): the ODE step, then collisions."""
-        system = self.system
-        if system.n == 0:
-            system.t = t0 + h
-            return
-        X_old = system.X
-        with np.errstate(over="ignore", invalid="ignore"):
-            X = self._step(system.derivative, X_old, t0, h)
-        if not np.all(np.isfinite(X)):
-            raise SimulationDiverged(step, t0, h, str(self.method), f"(in the effect {self.name!r})")
-        system.X, system.t = np.asfortranarray(X), t0 + h
-        if self.collider is not None:
-            X, _ = self.collider.collide(X_old, system.X, t0, h, m=system.m)
-            system.X = np.asfortranarray(X)
+        t1 = self.t + positive_number(h, "h", "seconds")
+        self._run(t1, t1 - self.t, 1, lambda system: None)  # one step, landing on t + h
 
     def _emit(self, t0, t1):
         for k, emitter in enumerate(self.emitters):  # a loop over emitters
@@ -359,7 +346,7 @@ class ParticleEffect:
         )
 
     def run(self, t_end, h, every=1):
-        """Step the tree to `t_end` and record snapshots.
+        """Step the tree to `t_end` and record snapshots: the root's :meth:`particles.ParticleSystem.run`.
 
         Parameters
         ----------
@@ -377,16 +364,9 @@ class ParticleEffect:
         Raises
         ------
         SimulationDiverged
-            As :meth:`step`.
+            When the state of an effect blows up: the message names the step
+            of this run, its time and the effect; the tree keeps the state at
+            the start of that step.
         """
-        if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
-            raise ValueError(f"every must be a positive integer, got {every!r}")
-        times = step_times(self.t, end_time(t_end, self.t, "effect"), h)
-        frames = [self.snapshot()]
-        for k in range(1, len(times)):  # a loop over time steps
-            self.step(times[k] - times[k - 1])
-            for effect in self.tree():
-                effect.system.t = float(times[k])  # no round-off drift from summing steps
-            if k % every == 0 or k == len(times) - 1:
-                frames.append(self.snapshot())
+        _, frames = self._run(end_time(t_end, self.t, "effect"), h, every, lambda system: self.snapshot())
         return frames

@@ -47,7 +47,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._checks import as_float_array, positive_number
-from .distributions import Cone, Disk, Point, SphereSurface, _at, _lifetime, _mean_spread, vary
+from .colours import hsv_to_rgb, to_rgb
+from .distributions import Cone, Disk, Point, SphereSurface, lifetime_range, mean_and_spread, position_at, vary
 from .system import ParticleSystem
 
 __all__ = ["Point", "Disk", "SphereSurface", "Cone", "Births", "Emitter", "ParticleEmitter", "vary"]
@@ -92,10 +93,8 @@ def _check_tint(tint):
     """None, "random", "parent" or a Matplotlib colour (checked now, not at the first emission)."""
     if tint is None or (isinstance(tint, str) and tint in ("random", "parent")):
         return tint
-    from matplotlib.colors import to_rgba
-
     try:
-        to_rgba(tint)
+        to_rgb(tint)
     except (ValueError, TypeError):
         raise ValueError(f"tint must be a Matplotlib colour, 'random', 'parent' or None, got {tint!r}") from None
     return tint
@@ -117,7 +116,7 @@ class _Source:
         if velocity is not None and not isinstance(velocity, Cone):
             raise ValueError(f"velocity must be a Cone or None, got {type(velocity).__name__}")
         self.velocity = velocity
-        self.lifetime = _lifetime(lifetime)
+        self.lifetime = lifetime_range(lifetime)
         self.mass = positive_number(mass, "mass", "kg")
         self.tint = _check_tint(tint)
         self.axis = axis
@@ -126,13 +125,9 @@ class _Source:
         if self.tint is None:
             return None
         if isinstance(self.tint, str) and self.tint == "random":  # a bright random hue each
-            from matplotlib.colors import hsv_to_rgb
-
             return hsv_to_rgb(np.stack([rng.random(n), np.full(n, 0.7), np.ones(n)], axis=1))
         if isinstance(self.tint, str) and self.tint == "parent":
             return parent
-        from matplotlib.colors import to_rgb
-
         return np.broadcast_to(to_rgb(self.tint), (n, 3)).copy()
 
     def _births(self, rng, t_birth, x, axis, v_base, parent_tint=None):
@@ -206,7 +201,7 @@ class Emitter(_Source):
         if axis not in (None, "normal"):
             raise ValueError(f"axis must be None or 'normal', got {axis!r}")
         super().__init__(velocity, lifetime, mass, tint, axis)
-        self.rate, self.rate_spread = _mean_spread((rate, rate_spread), "rate", "particles/s")
+        self.rate, self.rate_spread = mean_and_spread((rate, rate_spread), "rate", "particles/s")
         if not isinstance(shape, Point):
             raise ValueError(f"shape must be a Point, Disk or SphereSurface, got {type(shape).__name__}")
         self.shape, self.d = shape, shape.d
@@ -266,7 +261,8 @@ class Emitter(_Source):
         v_base = None
         if self.inherit and callable(self.shape.center) and n:  # the emitter's velocity, central differences
             delta, c = 1e-5, self.shape.center
-            v_base = self.inherit * (_at(c, t_birth + delta) - _at(c, t_birth - delta)) / (2 * delta)
+            ahead, behind = position_at(c, t_birth + delta), position_at(c, t_birth - delta)
+            v_base = self.inherit * (ahead - behind) / (2 * delta)
         return self._births(rng, t_birth, x, axis, v_base)
 
 
@@ -305,9 +301,8 @@ class ParticleEmitter(_Source):
 
     def __init__(self, source, rate=None, count=None, when="alive", velocity=None, axis=None, inherit=0.0,
                  lifetime=None, mass=1.0, tint=None):
-        from .effects import ParticleEffect  # here: effects imports this module
-
-        if not isinstance(source, (ParticleSystem, ParticleEffect)):
+        # a ParticleEffect is known by its system (this module does not import particles.effects)
+        if not isinstance(source, ParticleSystem) and not isinstance(getattr(source, "system", None), ParticleSystem):
             raise ValueError(f"source must be a ParticleSystem or a ParticleEffect, got {type(source).__name__}")
         super().__init__(velocity, lifetime, mass, tint, axis)
         if when not in ("alive", "death"):
@@ -320,8 +315,8 @@ class ParticleEmitter(_Source):
         else:
             if count is None:
                 raise ValueError("count (particles per parent) is needed when when='death'")
-            self.burst = _mean_spread(count, "count", "particles")  # (mean, spread) per parent
-        self.effect = source if isinstance(source, ParticleEffect) else None
+            self.burst = mean_and_spread(count, "count", "particles")  # (mean, spread) per parent
+        self.effect = None if isinstance(source, ParticleSystem) else source
         self.system = source.system if self.effect is not None else source
         if when == "death" and self.effect is None:
             raise ValueError("when='death' needs a source with lifetimes (a ParticleEffect)")

@@ -33,9 +33,9 @@ import numpy as np
 
 from ._checks import as_float_array, end_time, nonnegative_number, positive_number
 from .errors import SimulationDiverged
-from .forces import Force, pair_differences
-from .integrators import step_times
+from .fields import Force
 from .neighbors import cell_pairs
+from .pairs import pair_differences
 from .periodic import box_option, minimum_image
 from .system import ParticleSystem
 
@@ -225,8 +225,11 @@ class Containment(Force):
 class Flock:
     """A flock of boids: steering forces, then speed limits, one symplectic Euler step at a time.
 
-    Each step: ``v <- v + h F / m``, then the speed is clamped to
-    ``[min_speed, max_speed]`` (the direction is kept), then ``x <- x + h v``.
+    Each step (:meth:`stepper`): ``v <- v + h F / m``, then the speed is
+    clamped to ``[min_speed, max_speed]`` (the direction is kept), then
+    ``x <- x + h v``. The flock runs in :meth:`particles.ParticleSystem.run`,
+    the library's one loop, with that stepper; :meth:`run` and :meth:`step`
+    are thin wrappers of it.
 
     Parameters
     ----------
@@ -246,8 +249,19 @@ class Flock:
     system : ParticleSystem
         State and forces (``rules`` first).
     steps : int
-        Steps taken since the flock was made (numbers the step of a
-        :class:`particles.SimulationDiverged`).
+        Steps taken since the flock was made.
+
+    Examples
+    --------
+    The same flock, by its wrapper or by the system's loop with its stepper:
+
+    >>> rng = np.random.default_rng(0)
+    >>> x, v = rng.uniform(0, 5, (30, 2)), rng.normal(size=(30, 2))
+    >>> a, b = (Flock(x, v, Boids(2.0), max_speed=1.0) for _ in range(2))
+    >>> t, X = a.run(1.0, 0.05)
+    >>> t, Y = b.system.run(1.0, 0.05, method=b.stepper)
+    >>> bool(np.array_equal(X, Y))
+    True
     """
 
     def __init__(self, x, v, rules, min_speed=0.0, max_speed=np.inf, forces=(), m=1.0):
@@ -258,8 +272,9 @@ class Flock:
         self.max_speed = np.inf if max_speed == np.inf else positive_number(max_speed, "max_speed", "m/s")
         if self.max_speed < self.min_speed:
             raise ValueError(f"max_speed must be >= min_speed, got {max_speed!r} < {min_speed!r}")
+        v = as_float_array(v, "v", ndim=2).copy()
+        self._limit(v)
         self.system = ParticleSystem(x, v=v, m=m, forces=[rules, *forces])
-        self._limit(self.system.X[:, 1])
         self.steps = 0
 
     @property
@@ -273,6 +288,48 @@ class Flock:
         scale = np.divide(target, speed, out=np.ones_like(speed), where=speed > 0)
         for k in range(v.shape[1]):  # a loop over the d coordinates
             v[:, k] *= scale
+
+    def stepper(self, f, X, t, h):
+        """One step of the flock: symplectic Euler with the speed clamped between the kick and the drift.
+
+        ``v' = clamp(v + h a)``, ``x' = x + h v'`` with ``a = f(X, t)[:, 1]``.
+        A stepper of the library's form (first order, the second-order
+        layout), for :meth:`particles.ParticleSystem.run`.
+
+        Parameters
+        ----------
+        f : callable
+            ``f(X, t)`` of the second-order form ``(v, a)``: the system's derivative.
+        X : ndarray, shape (n, 2, d)
+            Positions (m) and velocities (m/s). Not modified.
+        t, h : float
+            Time and time step, in seconds.
+
+        Returns
+        -------
+        ndarray, shape (n, 2, d)
+        """
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # a blow-up is reported by the run
+            X_new = np.empty_like(X)
+            X_new[:, 1] = X[:, 1] + h * f(X, t)[:, 1]
+            self._limit(X_new[:, 1])
+            X_new[:, 0] = X[:, 0] + h * X_new[:, 1]
+        return X_new
+
+    stepper.order, stepper.explicit, stepper.second_order_layout = 1, True, True
+
+    def _count_step(self, system, t0):
+        self.steps += 1
+
+    def _run(self, t_end, h, every):
+        """:meth:`particles.ParticleSystem.run` with the flock's stepper, naming the cause of a blow-up."""
+        try:
+            return self.system.run(t_end, h, method=self.stepper, every=every, between_steps=self._count_step)
+        except SimulationDiverged as error:
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                F = self.system.total_force(self.system.X, self.system.t)  # at the start of the failing step
+            error.args = (f"{error} {self._blow_up_cause(F)}",)
+            raise
 
     def step(self, h):
         """Advance by `h` seconds.
@@ -293,23 +350,13 @@ class Flock:
             When the new state is not finite (a steering force overflowed);
             the flock is then left as it was before the step.
         """
-        h = positive_number(h, "h", "seconds")
-        X, t = self.system.X, self.system.t
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # a blow-up is reported below
-            F = self.system.total_force(X, t)
-            v = X[:, 1] + h * F / self.system.m[:, None]
-            self._limit(v)
-            x = X[:, 0] + h * v
-        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(v))):
-            raise SimulationDiverged(self.steps + 1, t, h, "symplectic_euler", self._blow_up_cause(F))
-        X[:, 1], X[:, 0] = v, x
-        self.system.t = t + h
-        self.steps += 1
+        t1 = self.t + positive_number(h, "h", "seconds")
+        self._run(t1, t1 - self.t, 1)  # one step, landing on t + h
         return self.system.state()
 
     def _blow_up_cause(self, F):
         """The likely cause of a non-finite step, for the message of SimulationDiverged."""
-        with np.errstate(invalid="ignore"):
+        with np.errstate(invalid="ignore", over="ignore"):
             largest = np.max(np.abs(F), initial=0.0)
         reached = f"reached {largest:.3g} N" if np.isfinite(largest) else "overflowed"
         return (f"(In the flock: the steering forces {reached}. The likely cause is a rule weight too large "
@@ -322,14 +369,4 @@ class Flock:
         Raises :class:`particles.SimulationDiverged` as :meth:`step` does
         (the flock then keeps the last finite state).
         """
-        if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
-            raise ValueError(f"every must be a positive integer, got {every!r}")
-        times = step_times(self.t, end_time(t_end, self.t, "flock"), h)
-        out = [self.system.state()]
-        for k in range(1, len(times)):  # a loop over time steps
-            self.step(times[k] - times[k - 1])
-            self.system.t = float(times[k])
-            if k % every == 0 or k == len(times) - 1:
-                out.append(self.system.state())
-        keep = [k for k in range(len(times)) if k % every == 0 or k == len(times) - 1]
-        return times[keep], np.stack(out)
+        return self._run(end_time(t_end, self.t, "flock"), h, every)

@@ -563,7 +563,8 @@ def _empty_frames(K, X):
     return np.empty((K,) + X.shape)
 
 
-def integrate(f, X0, t0, t1, h, method="rk4", every=1, blowup=BLOWUP_FACTOR, **options):
+def integrate(f, X0, t0, t1, h, method="rk4", every=1, blowup=BLOWUP_FACTOR, after_step=None, record=None,
+              **options):
     """Integrate dX/dt = f(X, t) from `t0` to `t1` with fixed steps of size `h`.
 
     Parameters
@@ -586,6 +587,16 @@ def integrate(f, X0, t0, t1, h, method="rk4", every=1, blowup=BLOWUP_FACTOR, **o
         overflows. Default :data:`BLOWUP_FACTOR` (``1e12``). A solution that
         truly grows that much (``x' = x`` over 30 s grows ``e^30 ~ 1e13``-fold)
         needs a larger factor, or ``None``: stop only on inf or NaN.
+    after_step : callable, optional
+        ``after_step(X, t0, t1) -> X``, called after every step that passed
+        the divergence guard, with the state at the step's end ``t1`` (``t0``:
+        its start). It returns the state the next step starts from: `X`
+        itself, a corrected copy, or a state with another number of rows
+        (particles born or removed). :meth:`particles.ParticleSystem.run`
+        calls its ``between_steps`` hooks from here.
+    record : callable, optional
+        ``record(X, t) -> frame``, called at every recorded time; the frames
+        are then returned in a list instead of the stacked states.
     **options
         Passed to the stepper (e.g. ``jac=`` for ``"implicit_euler"``).
 
@@ -593,8 +604,8 @@ def integrate(f, X0, t0, t1, h, method="rk4", every=1, blowup=BLOWUP_FACTOR, **o
     -------
     t : ndarray, shape (K,)
         Recorded times, ``t[0] == t0`` and ``t[-1] == t1``.
-    X : ndarray, shape (K,) + X0.shape
-        ``X[k]`` is the state at ``t[k]``.
+    X : ndarray, shape (K,) + X0.shape, or list
+        ``X[k]`` is the state at ``t[k]`` (with `record`, its frame).
 
     Raises
     ------
@@ -627,8 +638,11 @@ def integrate(f, X0, t0, t1, h, method="rk4", every=1, blowup=BLOWUP_FACTOR, **o
     keep = list(range(0, len(times), every))
     if keep[-1] != len(times) - 1:
         keep.append(len(times) - 1)
-    out = _empty_frames(len(keep), X)
-    out[0] = X
+    if record is None:
+        out = _empty_frames(len(keep), X)
+        out[0] = X
+    else:
+        out = [record(X, times[0])]
     slot = 1
     X_start = X
     # a state that grows (by default) a trillion-fold has blown up, even before it overflows
@@ -639,7 +653,15 @@ def integrate(f, X0, t0, t1, h, method="rk4", every=1, blowup=BLOWUP_FACTOR, **o
             size = np.max(np.abs(X), initial=0.0)
             if not size <= limit or size == np.inf:  # "not <=" is also true for NaN
                 raise _diverged(k, times, h, step, X_start, size, factor)
+            if after_step is not None:
+                X = after_step(X, times[k - 1], times[k])
             if slot < len(keep) and keep[slot] == k:
-                out[slot] = X
+                if record is not None:
+                    out.append(record(X, times[k]))
+                elif X.shape != out.shape[1:]:
+                    raise ValueError(f"the state's shape changed between two steps, from {out.shape[1:]} to "
+                                     f"{X.shape} (particles born or removed): pass record= to record it")
+                else:
+                    out[slot] = X
                 slot += 1
     return times[keep], out

@@ -67,14 +67,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._checks import as_float_array, count, method_name, nonnegative_number, positive_number
-from .collisions import _masses, _restitution
+from ._checks import (as_float_array, count, index_array, mass_array, nonnegative_number, pinned_indices,
+                      positive_number, restitution_coefficient)
+from ._vectors import unit
 from .constraints import color_springs
-from .forces import pair_differences
-from .integrators import INTEGRATORS
 from .neighbors import CellGrid, all_pairs
-from .springs import _indices, _unit
-from .system import _pinned_indices
+from .pairs import pair_differences
+from .steppers import after
 
 __all__ = ["SelfCollision", "SelfCollisionResult"]
 
@@ -163,9 +162,9 @@ class SelfCollision:
         self.thickness = positive_number(thickness, "thickness", "metres")
         self.x_rest = np.array(as_float_array(x_rest, "x_rest", ndim=2))
         n = self.n = len(self.x_rest)
-        self.m = np.array(_masses(m, n))
+        self.m = np.array(mass_array(m, n))
         self.inverse_mass = 1.0 / self.m
-        self.inverse_mass[_pinned_indices(pinned, n)] = 0.0
+        self.inverse_mass[pinned_indices(pinned, n)] = 0.0
         if rest_distance is None:
             rest_distance = 2.0 * self.thickness
         self.rest_distance = positive_number(rest_distance, "rest_distance", "metres")
@@ -176,12 +175,12 @@ class SelfCollision:
         self.tol = nonnegative_number(tol, "tol")
         if self.tol >= 1:
             raise ValueError(f"tol must lie in [0, 1) (a fraction of the thickness), got {tol!r}")
-        self.restitution = _restitution(restitution)
+        self.restitution = restitution_coefficient(restitution)
         self.friction = nonnegative_number(friction, "friction")
         i, j = CellGrid(self.x_rest, self.rest_distance).pairs()
         keys = [self._keys(i, j)]
         if exclude is not None:
-            ij = _indices(exclude, "exclude", 2)
+            ij = index_array(exclude, "exclude", 2)
             if len(ij) and (ij.max() >= n or ij.min() < 0):
                 raise ValueError(f"exclude must hold particle indices from 0 to {n - 1}, got {ij.max()}")
             keys.append(self._keys(ij[:, 0], ij[:, 1]))
@@ -288,7 +287,7 @@ class SelfCollision:
         first = len(i)
         while len(i):  # a loop over search-and-push passes
             found.append(self._keys(i, j))
-            r, _ = _unit(pair_differences(x, i, j))
+            r, _ = unit(pair_differences(x, i, j))
             converged = bool(r.min() >= t * (1.0 - self.tol))
             if converged or passes == self.iterations:
                 break
@@ -297,7 +296,7 @@ class SelfCollision:
             passes += 1
             i, j = self._close_pairs(x)
         converged = converged or not len(i)
-        min_distance = float(_unit(pair_differences(x, i, j))[0].min()) if len(i) else np.inf
+        min_distance = float(unit(pair_differences(x, i, j))[0].min()) if len(i) else np.inf
         if found:
             i, j = np.divmod(np.unique(np.concatenate(found)), n)
             for g in color_springs(np.stack([i, j], axis=1), n):  # one colour at a time
@@ -306,10 +305,10 @@ class SelfCollision:
 
     def _directions(self, x, i, j):
         """Distances and unit vectors from j to i; the rest-state direction where they coincide."""
-        r, u = _unit(pair_differences(x, i, j))
+        r, u = unit(pair_differences(x, i, j))
         same = r == 0
         if same.any():
-            u[:, same] = _unit(pair_differences(self.x_rest, i[same], j[same]))[1]
+            u[:, same] = unit(pair_differences(self.x_rest, i[same], j[same]))[1]
         return r, u
 
     def _weights(self, i, j):
@@ -358,9 +357,10 @@ class SelfCollision:
 
         Parameters
         ----------
-        step : callable or str
-            A stepper ``step(f, X, t, h)`` or a name of
-            :data:`particles.integrators.INTEGRATORS`.
+        step : str, callable or solver
+            A stepper ``step(f, X, t, h)``, a name of
+            :data:`particles.integrators.INTEGRATORS` or a solver object
+            (see :mod:`particles.steppers`).
 
         Returns
         -------
@@ -369,12 +369,8 @@ class SelfCollision:
             step appends a :class:`SelfCollisionResult` (without x and v) to
             :attr:`history`.
         """
-        step = method_name(step, INTEGRATORS)
 
-        def with_self_collision(f, X, t, h, **options):
-            X_new = step(f, X, t, h, **options)
-            if not np.isfinite(X_new).all():  # a blow-up: left for the run's divergence check to report
-                return X_new
+        def push(X_old, X_new, t, h):
             x = np.array(X_new[:, 0], order="F")
             v = np.array(X_new[:, 1], order="F")
             res = self._resolve(x, v)
@@ -383,7 +379,4 @@ class SelfCollision:
             X_new[:, 0], X_new[:, 1] = res.x, res.v
             return X_new
 
-        for attr in ("order", "explicit", "second_order_layout"):
-            setattr(with_self_collision, attr, getattr(step, attr, None))
-        with_self_collision.__name__ = f"self_collision({getattr(step, '__name__', type(step).__name__)})"
-        return with_self_collision
+        return after(step, push, "self_collision")

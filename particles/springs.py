@@ -27,44 +27,18 @@ References
 import numpy as np
 import scipy.sparse
 
-from ._checks import as_float_array
-from .forces import Force, pair_differences, scatter_pair_forces
+from ._checks import as_float_array, index_array, per_item
+from ._vectors import unit
+from .fields import Force
+from .pairs import pair_differences
 
 __all__ = ["Springs", "Bending", "Clamp", "spring_jacobian_blocks"]
-
-
-def _indices(value, name, width):
-    a = np.asarray(value)
-    if a.size == 0:
-        return np.zeros((0, width), dtype=np.int64)
-    if a.ndim != 2 or a.shape[1] != width or not np.issubdtype(a.dtype, np.integer):
-        raise ValueError(f"{name} must be an integer array of shape (s, {width}), got {a.dtype} {a.shape}")
-    if np.any(a < 0):
-        raise ValueError(f"{name} must hold particle indices >= 0")
-    return a.astype(np.int64)
 
 
 def _check_fit(highest, n, name):
     """Index arrays must point at particles of the system they act on (NumPy would clip or misplace)."""
     if highest >= n:
         raise ValueError(f"{name} refer to particle {highest}, but the system has only {n} particles")
-
-
-def _per_item(value, name, count, positive=False):
-    """A number or an array of length count, checked, as a float array."""
-    a = as_float_array(value, name, ndim=(0, 1))
-    if a.ndim == 1 and a.shape != (count,):
-        raise ValueError(f"{name} must be a number or have shape ({count},), got shape {a.shape}")
-    if np.any(a < 0) or (positive and np.any(a == 0)):
-        raise ValueError(f"{name} must be {'> 0' if positive else '>= 0'}")
-    return np.broadcast_to(a, (count,)).copy()
-
-
-def _unit(d):
-    """Lengths and unit vectors of the columns of d (shape (dim, s)); u = 0 where L = 0."""
-    L = np.sqrt(np.einsum("as,as->s", d, d))
-    u = np.divide(d, L, out=np.zeros_like(d), where=L > 0)
-    return L, u
 
 
 class Springs(Force):
@@ -100,7 +74,7 @@ class Springs(Force):
     """
 
     def __init__(self, indices, rest_length=None, k=1.0, kd=0.0, x=None, kind=None):
-        ij = _indices(indices, "indices", 2)
+        ij = index_array(indices, "indices", 2)
         if np.any(ij[:, 0] == ij[:, 1]):
             raise ValueError("indices must join two different particles in every spring")
         self.i, self.j = ij[:, 0].copy(), ij[:, 1].copy()
@@ -111,12 +85,12 @@ class Springs(Force):
             x = as_float_array(x, "x", ndim=2)
             if s and ij.max() >= len(x):
                 raise ValueError(f"indices refer to particle {ij.max()} but x has only {len(x)} particles")
-            rest_length, _ = _unit(pair_differences(x, self.i, self.j))
-        self.rest_length = _per_item(rest_length, "rest_length", s)
+            rest_length, _ = unit(pair_differences(x, self.i, self.j))
+        self.rest_length = per_item(rest_length, "rest_length", s)
         if np.any(self.rest_length < 0):
             raise ValueError("rest_length must be >= 0 (in metres); 0 is a zero-length spring")
-        self.k = _per_item(k, "k", s, positive=True)
-        self.kd = _per_item(kd, "kd", s)
+        self.k = per_item(k, "k", s, positive=True)
+        self.kd = per_item(kd, "kd", s)
         self.kind = kind
         self._highest = int(ij.max()) if s else -1
         self._incidence = None  # (n, s) sparse matrix with +1 at (i, s) and -1 at (j, s), built on first use
@@ -131,7 +105,7 @@ class Springs(Force):
 
     def lengths(self, x):
         """Current lengths ``|x_i - x_j|``, shape (s,), in metres."""
-        L, _ = _unit(pair_differences(np.asarray(x, dtype=float), self.i, self.j))
+        L, _ = unit(pair_differences(np.asarray(x, dtype=float), self.i, self.j))
         return L
 
     def strain(self, x):
@@ -231,7 +205,7 @@ def spring_jacobian_blocks(d, L0, k, kd, clamp=False, w=None):
     -------
     Bx, Bv : ndarray, shape (s, dim, dim)
     """
-    L, u = _unit(d)
+    L, u = unit(d)
     dim = d.shape[0]
     uu = np.einsum("as,bs->sab", u, u)
     P = np.eye(dim)[None, :, :] - uu
@@ -288,20 +262,20 @@ class Bending(Force):
     """
 
     def __init__(self, triples, kb=1.0, rest_angle=None, x=None):
-        ijl = _indices(triples, "triples", 3)
+        ijl = index_array(triples, "triples", 3)
         self.i, self.j, self.l = (ijl[:, c].copy() for c in range(3))
         b = len(ijl)
         self._highest = int(ijl.max()) if b else -1
-        self.kb = _per_item(kb, "kb", b)
+        self.kb = per_item(kb, "kb", b)
         if rest_angle is None and x is not None:
             rest_angle = self.angles(as_float_array(x, "x", ndim=2))
-        self.rest_angle = _per_item(0.0 if rest_angle is None else rest_angle, "rest_angle", b)
+        self.rest_angle = per_item(0.0 if rest_angle is None else rest_angle, "rest_angle", b)
 
     def _geometry(self, x):
         e1 = pair_differences(x, self.j, self.i)  # (d, b)
         e2 = pair_differences(x, self.l, self.j)
-        L1, u1 = _unit(e1)
-        L2, u2 = _unit(e2)
+        L1, u1 = unit(e1)
+        L2, u2 = unit(e2)
         c = np.clip(np.einsum("as,as->s", u1, u2), -1.0, 1.0)
         return L1, u1, L2, u2, c
 
@@ -371,7 +345,7 @@ class Clamp(Force):
     uses_velocity = False
 
     def __init__(self, pairs, direction, kb=1.0):
-        ij = _indices(pairs, "pairs", 2)
+        ij = index_array(pairs, "pairs", 2)
         self.i, self.j = ij[:, 0].copy(), ij[:, 1].copy()
         c = len(ij)
         self._highest = int(ij.max()) if c else -1
@@ -383,18 +357,18 @@ class Clamp(Force):
         if np.any(norm == 0):
             raise ValueError("direction must be non-zero vectors")
         self.direction = u / norm[:, None]
-        self.kb = _per_item(kb, "kb", c)
+        self.kb = per_item(kb, "kb", c)
 
     def angles(self, x):
         """Angle between each clamped segment and its direction, in radians, shape (c,)."""
         e = pair_differences(np.asarray(x, dtype=float), self.j, self.i)
-        L, u = _unit(e)
+        L, u = unit(e)
         return np.arccos(np.clip(np.einsum("as,sa->s", u, self.direction), -1.0, 1.0))
 
     def add_to(self, F, x, v, t, m):
         _check_fit(self._highest, len(x), "pairs")
         e = pair_differences(x, self.j, self.i)  # (d, c)
-        L, u = _unit(e)
+        L, u = unit(e)
         u0 = self.direction.T
         c = np.clip(np.einsum("as,as->s", u, u0), -1.0, 1.0)
         theta = np.arccos(c)

@@ -7,7 +7,9 @@ with a continuation (small systems with bending, such as a hair).
 
 import numpy as np
 
-from .forces import Damping
+from .errors import ConvergenceError
+from .fields import Damping, Gravity, Wind
+from .implicit import BaraffWitkin
 
 __all__ = ["relax"]
 
@@ -58,10 +60,6 @@ def relax(system, h=0.05, tol=1e-8, max_steps=2000, method="auto"):
         When no equilibrium is found.
     """
     import scipy.optimize
-
-    from .errors import ConvergenceError
-    from .forces import Gravity, Wind
-    from .implicit import BaraffWitkin
 
     if method == "auto":
         simple = all(isinstance(f, (Gravity, Damping, Wind)) for f in system.other_forces())
@@ -122,7 +120,7 @@ def relax(system, h=0.05, tol=1e-8, max_steps=2000, method="auto"):
         X[free, 0] = y.reshape(-1, system.d)
         if not sol.success or residual > max(threshold(X[:, 0]), max(tol, 1e-6) * scale):
             raise ConvergenceError(f"relax: Newton found no static equilibrium ({sol.message})")
-        system.X = X
+        system.set_state(X)
         return int(evaluations)
     # one linearized backward-Euler solve per pseudo step: Newton's method on F(x) = 0, regularized
     solver = BaraffWitkin(system, linear_solver="direct", newton_iterations=1, energy_check=False)
@@ -131,9 +129,9 @@ def relax(system, h=0.05, tol=1e-8, max_steps=2000, method="auto"):
         X[:, 1] = 0.0
         residual = np.max(np.abs(system.total_force(X, system.t)[free]), initial=0.0)
         if residual <= threshold(X[:, 0]):
-            system.X = X
+            system.set_state(X)
             return step
-        X = solver(None, X, system.t, h)
+        X = solver.step(X, system.t, h)
         if not np.all(np.isfinite(X)):
             break
     raise ConvergenceError(f"relax: no static equilibrium within {max_steps} steps "

@@ -30,6 +30,7 @@ References
 import numpy as np
 
 from ._checks import as_float_array, positive_number
+from ._vectors import unit
 
 __all__ = ["Surface", "Plane", "Sphere", "Box", "Union", "Intersection", "Complement"]
 
@@ -100,7 +101,7 @@ class Surface:
     def normal(self, x):
         """Unit outward normal ``grad H / |grad H|``, shape (n, d) or (d,)."""
         x, single = self._points(x)
-        n = _unit(self._gradient(x))
+        _, n = unit(self._gradient(x), axis=1)  # rows of zeros stay zero
         return n[0] if single else n
 
     def closest_point(self, x):
@@ -145,13 +146,6 @@ class Surface:
 
     def __invert__(self):
         return Complement(self)
-
-
-def _unit(g):
-    """Rows of g scaled to unit length (rows of zeros are left as they are)."""
-    norm = np.sqrt(np.einsum("ij,ij->i", g, g))
-    norm[norm == 0] = 1.0
-    return g / norm[:, None]
 
 
 class Plane(Surface):

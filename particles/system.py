@@ -20,8 +20,9 @@ References
 
 import numpy as np
 
-from ._checks import as_float_array, end_time, finite_real, method_name, positive_number
-from .integrators import BLOWUP_FACTOR, INTEGRATORS, integrate
+from ._checks import as_float_array, end_time, finite_real, pinned_indices, positive_number
+from .integrators import BLOWUP_FACTOR, integrate
+from .steppers import as_stepper
 
 __all__ = ["ParticleSystem"]
 
@@ -100,13 +101,14 @@ class ParticleSystem:
                     f"forces must be Force objects with an add_to(F, x, v, t, m) method, "
                     f"got {type(force).__name__}"
                 )
-        self.pinned = _pinned_indices(pinned, n)
+        self.pinned = pinned_indices(pinned, n)
         if np.any(v[self.pinned] != 0):
             raise ValueError("v of pinned particles must be zero: a pinned particle does not move")
         self.X = np.asfortranarray(np.stack([x, v], axis=1))
         self.t = finite_real(t, "t", "seconds")
         self.attributes = {}
         self._fill = {}
+        self._changes = 0  # particles added or removed so far (a force reused by a run must be for the same ones)
 
     @property
     def n(self):
@@ -256,6 +258,7 @@ class ParticleSystem:
 
     def _forces_changed(self):
         """Tell forces with cached per-particle data that the particles changed."""
+        self._changes += 1
         for force in self.forces:
             reset = getattr(force, "reset", None)
             if callable(reset):
@@ -408,15 +411,28 @@ class ParticleSystem:
             return _ReusedForces(self)
         return self.derivative
 
+    def _stepper(self, method):
+        """The stepper form of `method` (see :mod:`particles.steppers`), a solver checked to be this system's."""
+        step = as_stepper(method)
+        solver = getattr(step, "solver", None)
+        built_for = getattr(solver, "system", self)
+        if built_for is not self:
+            raise ValueError(
+                f"method is a {type(solver).__name__} built for another system (it solves that system's "
+                "springs, masses and pins); build one for this system")
+        return step
+
     def step(self, h, method="rk4", blowup=BLOWUP_FACTOR, **options):
-        """Advance the state by one step of `h` seconds.
+        """Advance the state by one step of `h` seconds: :meth:`run` to ``t + h``.
 
         Parameters
         ----------
         h : float
             Time step, in seconds, > 0.
-        method : str or callable
-            A key of :data:`particles.integrators.INTEGRATORS` or a stepper.
+        method : str, callable or solver
+            A key of :data:`particles.integrators.INTEGRATORS`, a stepper
+            ``step(f, X, t, h)`` or a solver object with ``step(X, t, h)``
+            (see :meth:`run`).
         blowup : float or None
             Growth rule of the divergence guard, as in :meth:`run`.
         **options
@@ -433,16 +449,20 @@ class ParticleSystem:
         SimulationDiverged
             As :meth:`run`; the system is then left as it was.
         """
-        step = method_name(method, INTEGRATORS)
-        h = positive_number(h, "h", "seconds")
-        _, X = integrate(
-            self._rhs(step), self.X, self.t, self.t + h, h, method=step, blowup=blowup, **options
-        )
-        self.X, self.t = np.array(X[-1], order="F"), self.t + h
+        t1 = self.t + positive_number(h, "h", "seconds")
+        self.run(t1, t1 - self.t, method=method, blowup=blowup, **options)  # one step, landing on t + h
         return self.state()
 
-    def run(self, t_end, h, method="rk4", every=1, blowup=BLOWUP_FACTOR, **options):
-        """Simulate from the current time to `t_end` and record the states.
+    def run(self, t_end, h, method="rk4", every=1, blowup=BLOWUP_FACTOR, between_steps=(), record=None,
+            **options):
+        """Simulate from the current time to `t_end` and record the states: the slide's loop.
+
+        This is the library's one time loop. Collisions, constraints and
+        solvers come in through `method` (a stepper, possibly wrapped, see
+        :mod:`particles.steppers`); flocks, effects and anything else that
+        acts between two steps come in through `between_steps`. The steps,
+        `every` and the divergence guard are those of
+        :func:`particles.integrators.integrate`.
 
         Parameters
         ----------
@@ -450,8 +470,12 @@ class ParticleSystem:
             End time, in seconds, >= the current time :attr:`t`.
         h : float
             Time step, in seconds; the last step is shortened to land on `t_end`.
-        method : str or callable
-            A key of :data:`particles.integrators.INTEGRATORS` or a stepper.
+        method : str, callable or solver
+            A key of :data:`particles.integrators.INTEGRATORS`, a stepper
+            ``step(f, X, t, h)`` (called with ``f = derivative``), or a
+            solver object with ``step(X, t, h)`` and ``order``
+            (:class:`particles.implicit.BaraffWitkin`,
+            :class:`particles.implicit.Prefactored`), built for this system.
         every : int
             Record every `every`-th step (first and last always recorded).
         blowup : float or None
@@ -461,6 +485,18 @@ class ParticleSystem:
             Default :data:`particles.integrators.BLOWUP_FACTOR` (``1e12``):
             no particle motion worth animating grows that much. ``None``: stop
             only on inf or NaN.
+        between_steps : callable or sequence of callables
+            Hooks ``hook(system, t0)``, called in order after every step that
+            passed the divergence guard, with this system at the step's end
+            (``system.t``; ``t0`` is the step's start). A hook may read the
+            state, add or remove particles (:meth:`add_particles`,
+            :meth:`remove_particles`: births and deaths of an effect) or
+            replace the state (:meth:`set_state`); the next step starts from
+            the system as the hooks leave it. Never assign ``system.X``.
+        record : callable, optional
+            ``record(system) -> frame``, called at every recorded time
+            instead of copying the state; the run then returns the frames in
+            a list (needed when hooks change the number of particles).
         **options
             Passed to the stepper.
 
@@ -468,17 +504,23 @@ class ParticleSystem:
         -------
         t : ndarray, shape (K,)
             Recorded times, in seconds, from the current time to `t_end`.
-        X : ndarray, shape (K, n, 2, d)
-            States at those times: positions (m) and velocities (m/s).
+        X : ndarray, shape (K, n, 2, d), or list
+            States at those times: positions (m) and velocities (m/s); with
+            `record`, the list of its frames.
 
         Raises
         ------
         SimulationDiverged
             When the state becomes inf or NaN, or grows beyond the `blowup`
-            rule; the message says which, at which step and time. The system
-            is then left as it was before the call.
+            rule; the message says which, at which step and time. Without
+            hooks and `record`, the system is then left as it was before
+            the call. With them it is updated after every step (the hooks
+            see it, and births cannot be undone), and keeps the state at the
+            start of the failing step.
         ValueError
-            When ``t_end`` is not a finite number at least the current time.
+            When ``t_end`` is not a finite number at least the current time,
+            when a solver was built for another system, or when a hook changes
+            the number of particles and `record` is not given.
 
         Notes
         -----
@@ -490,16 +532,67 @@ class ParticleSystem:
         step is reused at the start of the next one: a run of ``N`` steps
         evaluates the forces ``N + 1`` times instead of ``2 N``, with the
         same trajectory to the last bit. The reuse is checked on the values
-        (the positions, and the time if a force depends on it), so it can
-        never return a force for another state.
+        (the positions, the time if a force depends on it, and whether
+        particles were added or removed), so it can never return a force for
+        another state.
+
+        Examples
+        --------
+        A hook that removes the particles that fall below the ground:
+
+        >>> from particles.forces import Gravity
+        >>> ps = ParticleSystem([[0.0, 1.0], [1.0, 3.0]], forces=[Gravity([0.0, -9.81])])
+        >>> def below_ground(system, t0):
+        ...     system.remove_particles(system.X[:, 0, 1] < 0.0)
+        >>> t, n = ps.run(0.7, 0.01, between_steps=below_ground, record=lambda system: system.n)
+        >>> n[0], n[-1]
+        (2, 1)
         """
         t_end = end_time(t_end, self.t)
-        step = method_name(method, INTEGRATORS)
-        t, X = integrate(
-            self._rhs(step), self.X, self.t, t_end, h, method=step, every=every, blowup=blowup, **options
-        )
-        self.X, self.t = np.array(X[-1], order="F"), float(t[-1])
+        step = self._stepper(method)
+        hooks = _hook_list(between_steps)
+        rhs = self._rhs(step)
+        if not hooks and record is None:
+            t, X = integrate(rhs, self.X, self.t, t_end, h, method=step, every=every, blowup=blowup, **options)
+            self.X, self.t = np.array(X[-1], order="F"), float(t[-1])
+            return t, X
+
+        def after_step(X, t0, t1):
+            self.X, self.t = np.asfortranarray(X), float(t1)  # the hooks see the system at the step's end
+            for hook in hooks:  # a loop over the few hooks
+                hook(self, t0)
+            return self.X
+
+        frame = None if record is None else (lambda X, t: record(self))
+        t, X = integrate(rhs, self.X, self.t, t_end, h, method=step, every=every, blowup=blowup,
+                         after_step=after_step, record=frame, **options)
         return t, X
+
+    def set_state(self, X=None, t=None):
+        """Replace the state and/or the time of the same particles (for hooks and solvers outside the loop).
+
+        Parameters
+        ----------
+        X : array_like, shape (n, 2, d), optional
+            The new positions (m) and velocities (m/s), finite, for the same
+            ``n`` particles (add or remove particles with
+            :meth:`add_particles` and :meth:`remove_particles`). Copied.
+        t : float, optional
+            The new time, in seconds.
+
+        Raises
+        ------
+        ValueError
+            For a state of another shape, a non-finite one, or pinned
+            particles given a velocity.
+        """
+        if X is not None:
+            X = as_float_array(X, "X", shape=self.X.shape)
+            if np.any(X[self.pinned, 1] != 0):
+                raise ValueError("v of pinned particles must be zero: a pinned particle does not move")
+            self.X = np.array(X, order="F")
+        if t is not None:
+            self.t = finite_real(t, "t", "seconds")
 
 
 class _ReusedForces:
@@ -514,11 +607,12 @@ class _ReusedForces:
     def __init__(self, system):
         self.system = system
         self.uses_time = any(getattr(f, "uses_time", True) for f in system.forces)
-        self.x = self.t = self.a = None
+        self.x = self.t = self.a = self.changes = None
 
     def __call__(self, X, t):
         x = X[:, 0]
-        if self.x is not None and (not self.uses_time or t == self.t) and np.array_equal(x, self.x):
+        if (self.x is not None and (not self.uses_time or t == self.t) and self.changes == self.system._changes
+                and np.array_equal(x, self.x)):
             dX = np.empty_like(X)
             dX[:, 0] = X[:, 1]
             dX[:, 1] = self.a
@@ -527,6 +621,7 @@ class _ReusedForces:
             return dX
         dX = self.system.derivative(X, t)
         self.x, self.t, self.a = x.copy(order="K"), t, dX[:, 1].copy(order="K")
+        self.changes = self.system._changes
         return dX
 
 
@@ -544,18 +639,11 @@ def _force_list(forces):
         ) from None
 
 
-def _pinned_indices(pinned, n):
-    """Sorted unique indices from indices or a boolean mask, checked against n."""
-    p = np.asarray(pinned)
-    if p.dtype == bool:
-        if p.shape != (n,):
-            raise ValueError(f"pinned as a boolean mask must have shape ({n},), got {p.shape}")
-        return np.flatnonzero(p)
-    if p.size == 0:
-        return np.zeros(0, dtype=int)
-    if p.ndim != 1 or not np.issubdtype(p.dtype, np.integer):
-        raise ValueError(f"pinned must be a list of particle indices or a boolean mask, got {pinned!r}")
-    if np.any((p < -n) | (p >= n)):
-        raise ValueError(f"pinned indices must lie in [0, {n}), got {p.tolist()}")
-    p = np.unique(p % n)
-    return p
+def _hook_list(between_steps):
+    """The `between_steps` of a run as a list of callables: one hook alone is accepted too."""
+    hooks = [between_steps] if callable(between_steps) else list(between_steps or ())
+    for hook in hooks:
+        if not callable(hook):
+            raise ValueError(f"between_steps must be a function hook(system, t0) or a list of them, "
+                             f"got {type(hook).__name__}")
+    return hooks

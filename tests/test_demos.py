@@ -130,14 +130,15 @@ def _documented(function):
 
 
 def _public_api_of_the_effects():
-    from particles import clothdemos, demos, render
+    from particles import demos, render
     from particles.collisions import Contacts
     from particles.emitters import Disk, Point, SphereSurface
     from particles.flocking import Boids
 
-    functions = [demos.fountain, demos.fireworks, demos.smoke, demos.bouncing, demos.flock, demos.genesis,
-                 clothdemos.hanging_cloth, clothdemos.draped_cloth, demos.run_demo, Contacts.empty,
-                 Contacts.concatenate, render.save_gif, render.to_html, render.animate_snapshots, Boids.add_to]
+    functions = [demo.function for demo in demos.DEMOS.values()]
+    functions += [demos.run_demo, demos.register, demos.effects.record_effect, demos.data.circle,
+                  demos.data.steps_per_frame, Contacts.empty, Contacts.concatenate, render.save_gif, render.to_html,
+                  render.animate_snapshots, Boids.add_to]
     functions += [getattr(shape, method) for shape in (Point, Disk, SphereSurface) for method in ("sample", "normal")]
     return functions
 
@@ -153,3 +154,40 @@ def test_public_functions_have_numpydoc_sections(function):
               if name not in ("self", "cls")}
     assert "Parameters" in sections and wanted <= listed, f"not documented: {sorted(wanted - listed)}"
     assert "Returns" in sections or function.__name__ == "add_to"
+
+
+def test_the_registry_lists_every_demo_of_every_family_module():
+    """DEMOS is written out in particles/demos/__init__.py: every demo function of the family modules is in it."""
+    import importlib
+    import inspect
+    import pkgutil
+
+    import particles.demos as package
+
+    listed = {demo.function for demo in DEMOS.values()}
+    for info in pkgutil.iter_modules(package.__path__):
+        module = importlib.import_module(f"particles.demos.{info.name}")
+        for name in getattr(module, "__all__", []):
+            function = getattr(module, name)
+            if inspect.isfunction(function) and list(inspect.signature(function).parameters) == ["seconds", "fps",
+                                                                                                  "seed"]:
+                assert function in listed, f"particles.demos.{info.name}.{name} is not in DEMOS"
+    assert list(DEMOS)[:8] == ["fountain", "fireworks", "smoke", "bouncing", "flock", "genesis", "cloth", "drape"]
+
+
+def test_the_common_arguments_are_described_once():
+    """The paragraph on seconds, fps and seed is written in the package docstring only, not in every demo."""
+    from pathlib import Path
+
+    import particles.demos as package
+
+    texts = [p.read_text() for p in Path(package.__file__).parent.glob("*.py")]
+    assert sum(t.count("does not change the physics") for t in texts) == 0
+    assert sum(t.count("only says how often a frame is recorded") for t in texts) == 1
+
+
+def test_the_old_module_of_the_cloth_demos_still_imports():
+    """particles.clothdemos, the old home of the cloth demos, re-exports them."""
+    from particles import clothdemos
+
+    assert clothdemos.hanging_cloth is DEMOS["cloth"].function and clothdemos.draped_cloth is DEMOS["drape"].function

@@ -421,12 +421,12 @@ def test_tail_corrections_and_box_refuse_bad_input_by_name():
 
 def test_force_pass_in_chunks_equals_one_pass(monkeypatch):
     """The force pass over chunks of pairs gives the forces and virial of a single pass."""
-    import particles.forces as forces
+    import particles.lennardjones as lennardjones
 
     x, box = periodic_liquid(5, 0.86, 0.2, 5)
     F_one = LennardJones.from_epsilon_sigma(cutoff=3.0, box=box)(x)
     lj = LennardJones.from_epsilon_sigma(cutoff=3.0, box=box)
-    monkeypatch.setattr(forces, "_PAIR_CHUNK", 1000)  # many chunks (the 2 n floor: 1000 pairs each)
+    monkeypatch.setattr(lennardjones, "_PAIR_CHUNK", 1000)  # many chunks (the 2 n floor: 1000 pairs each)
     np.testing.assert_allclose(lj(x), F_one, rtol=0, atol=1e-10)
     assert lj.last_virial == pytest.approx(lj.virial(x), rel=1e-12)
 

@@ -286,7 +286,7 @@ def test_implicit_steppers_check_their_input():
     with pytest.raises(ValueError, match="system must be a MassSpringSystem"):
         BaraffWitkin(object())
     with pytest.raises(ValueError, match=r"X must have the shape of the system's state \(25, 2, 3\)"):
-        BaraffWitkin(c)(None, np.zeros((3, 2, 3)), 0.0, 0.01)
+        BaraffWitkin(c).step(np.zeros((3, 2, 3)), 0.0, 0.01)
     with pytest.raises(ValueError, match="iterations must be a positive integer or None"):
         Prefactored(c, 0.01, iterations=0)
     with pytest.raises(ValueError, match="linear_solver must be 'auto', 'cg' or 'direct'"):
@@ -383,3 +383,22 @@ def test_solvers_leave_a_system_at_rest_without_forces_at_rest():
         X = solver(None, c.X, 0.0, 1 / 30)
         np.testing.assert_allclose(X, c.X, atol=1e-12)
     assert solver.counts == [0]
+
+
+@pytest.mark.parametrize("make", [lambda c: BaraffWitkin(c, linear_solver="direct"), lambda c: Prefactored(c, 0.02)],
+                         ids=["baraff_witkin", "prefactored"])
+def test_solvers_say_what_they_use(make):
+    """A solver's step is step(X, t, h) (no f: it uses its system); the old form solver(f, X, t, h) is the same."""
+    import inspect
+
+    c = small_cloth()
+    solver = make(c)
+    assert list(inspect.signature(solver.step).parameters) == ["X", "t", "h"] and solver.order == 1
+    X = c.state()
+    X.setflags(write=False)
+    new = solver.step(X, 0.0, 0.02)
+    np.testing.assert_array_equal(make(c)(None, X, 0.0, 0.02), new)  # the stepper form, f unused
+    t, Y = c.run(0.02, 0.02, method=make(c))
+    np.testing.assert_array_equal(Y[-1], new)
+    doc = inspect.getdoc(type(solver).step) + inspect.getdoc(type(solver))
+    assert ("A = M - h D - h^2 K" in doc) if isinstance(solver, BaraffWitkin) else ("M + h^2 L" in doc)

@@ -175,6 +175,25 @@ CLAIMS = [
     Claim("07_stiffness_provot_implicit", "at most 39 nonzeros per row of K",
           rf"48 x 48 cloth: .* nonzeros per row \d+ to {NUMBER}",
           39, 0, "39 nonzeros"),
+    # Lecture 8: Lagrange multipliers, PBD and XPBD stiffness, small steps
+    Claim("08_constraints", "the multiplier pendulum's period at 120 degrees within 1e-4 of the elliptic integral",
+          rf"exact period \S+ s, measured \S+ s, relative error {NUMBER}",
+          0.0, (0.0, 1e-4), None),
+    Claim("08_constraints", "at 120 degrees the period is 1.373 times the small-angle one",
+          rf"the exact one is {NUMBER} times longer",
+          1.373, 5e-4, "1.373 times the small-angle period"),
+    Claim("08_constraints", "XPBD's curtain at one iteration: 28.94 N/m for springs of 30",
+          rf"XPBD effective stiffness \(N/m\): \[{NUMBER}",
+          28.94, 5e-3, "28.94 N/m at one iteration"),
+    Claim("08_constraints", "PBD's curtain at 50 iterations: 866.6 N/m",
+          rf"PBD effective stiffness \(N/m\): \[\s*\S+\s+\S+\s+{NUMBER}\]",
+          866.6, 0.05, "866.6 N/m at 50"),
+    Claim("08_constraints", "XPBD varies by less than 5% from 1 to 50 iterations",
+          rf"XPBD varies by {NUMBER}% from 1 to 50 iterations",
+          3.7, 0.05, "a variation of 3.7%"),
+    Claim("08_constraints", "20 substeps of one iteration: largest strain 1.14%",
+          rf"20 substeps x 1 iter\.\s+{NUMBER}%",
+          1.14, 5e-3, "stretch it to 1.14%"),
 ]
 
 

@@ -23,6 +23,7 @@ EXERCISES = {
     "05": ["00_warmup"],
     "06": ["03_provot"],
     "07": ["02_stiffness", "03_provot", "04_discretization"],
+    "08": ["05_xpbd", "03_provot"],
 }
 MAX_CODE_LINES = 20
 
@@ -33,7 +34,7 @@ def lecture(request):
 
 
 def test_the_series_is_complete():
-    """Lectures 01 to 07 exist, one per number, each with its expected exercise links listed."""
+    """Lectures 01 to 08 exist, one per number, each with its expected exercise links listed."""
     assert [p.name[:2] for p in LECTURES] == sorted(EXERCISES)
 
 

@@ -96,16 +96,18 @@ def test_renamed_copy_of_library_midpoint_is_identical(tmp_path):
 
 
 def test_renamed_copy_of_the_string_builder_is_identical(tmp_path):
-    """particles.massspring.string pasted as a helper, names changed, library helpers imported: identical."""
+    """particles.massspring.string (from particles.strands) pasted, names changed, helpers imported: identical."""
     # keyword arguments (m=m, springs=[springs], pinned=pinned) keep their names: they are the callee's API
     names = {"string": "make_chain", "n": "count", "length": "L", "x": "pos", "i": "idx", "direction": "u"}
-    cell = ("import numpy as np\nfrom particles.massspring import MassSpringSystem, _chain, _chain_parameters, "
-            "_common_forces\nfrom particles.springs import Springs\n\n"
+    cell = ("import numpy as np\nfrom particles.massspring import MassSpringSystem\n"
+            "from particles.strands import _chain, _chain_parameters\n"
+            "from particles.springsystem import common_forces\n"
+            "from particles.springs import Springs\n\n"
             + renamed(particles.massspring.string, names)
             + "\n\ndef run(f, X0, t0, h, n_steps):\n    system = make_chain(3)\n    return system.X, n_steps\n")
     write(tmp_path, "ada", EX00, replace={"run": cell})
     found = pairs_of(similarity([tmp_path], root=ROOT), "ada")
-    assert ("make_chain", "library: particles.massspring.string", 1.0, "identical") in found
+    assert ("make_chain", "library: particles.strands.string", 1.0, "identical") in found
 
 
 def test_two_students_with_the_same_code_under_other_names(tmp_path):

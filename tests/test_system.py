@@ -377,3 +377,111 @@ def test_time_dependent_forces_are_reused_only_at_the_same_time():
     ref = ParticleSystem([[1.0, 0.0], [0.0, 2.0]], v=[[0.0, 1.0], [1.0, 0.0]], forces=[field])
     _, X_ref = integrate(ref.derivative, ref.X, 0.0, 1.0, 0.01, method="verlet")
     np.testing.assert_array_equal(X, X_ref)
+
+
+# -- the one loop: hooks between steps, records, solver objects --------------------------------------------
+
+
+def test_a_hook_between_steps_sees_each_step_end_and_may_add_and_remove_particles():
+    """between_steps is called once per step with the system at the step's end; births and deaths take effect."""
+    ps = ParticleSystem([[0.0, 0.0]], v=[[1.0, 0.0]])
+    seen = []
+
+    def hook(system, t0):
+        seen.append((t0, system.t, system.n))
+        system.add_particles([[0.0, 1.0]], v=[[0.0, 0.0]])
+        if system.n > 3:
+            system.remove_particles([0])
+
+    t, counts = ps.run(0.5, 0.1, method="euler", between_steps=hook, record=lambda system: system.n)
+    assert [round(s[1], 12) for s in seen] == [0.1, 0.2, 0.3, 0.4, 0.5]
+    assert [s[0] for s in seen[1:]] == [s[1] for s in seen[:-1]]  # each step starts where the last ended
+    assert counts == [1, 2, 3, 3, 3, 3] and ps.n == 3 and ps.t == 0.5
+    np.testing.assert_allclose(ps.X[:, 0, 1], 1.0)  # the first particle, moving along x, was removed
+
+
+def test_a_hook_that_changes_the_count_needs_record():
+    """Recording states of changing size without record= says what to do."""
+    ps = ParticleSystem([[0.0, 0.0]])
+    with pytest.raises(ValueError, match="particles born or removed.*record="):
+        ps.run(0.3, 0.1, between_steps=lambda system, t0: system.add_particles([[1.0, 1.0]]))
+    with pytest.raises(ValueError, match="between_steps must be a function"):
+        ps.run(1.0, 0.1, between_steps=[42])
+
+
+def test_hooks_and_records_leave_the_trajectory_unchanged():
+    """A run with a hook that only watches gives the states of a plain run, bit for bit, recorded either way."""
+    make = lambda: ParticleSystem([[0.0, 1.0], [1.0, 0.0]], v=[[0.3, 0.0], [0.0, -0.2]],  # noqa: E731
+                                  forces=[NBodyGravity(G=1.0, softening=0.1)])
+    t, X = make().run(2.0, 0.01, method="verlet", every=7)
+    ps, calls = make(), []
+    t2, X2 = ps.run(2.0, 0.01, method="verlet", every=7, between_steps=[lambda s, t0: calls.append(t0)])
+    t3, X3 = make().run(2.0, 0.01, method="verlet", every=7, record=lambda system: system.state())
+    np.testing.assert_array_equal(t, t2)
+    np.testing.assert_array_equal(X, X2)
+    np.testing.assert_array_equal(X, np.stack(X3))
+    assert len(calls) == 200
+
+
+def test_with_hooks_a_divergence_keeps_the_last_finite_state():
+    """The hooks have seen (and may have changed) the system, so a blow-up leaves it at the failing step's start."""
+    stiff = Field(lambda x, t: -1e6 * x)
+    ps = ParticleSystem([[1.0, 0.0]], forces=[stiff])
+    with pytest.raises(SimulationDiverged) as info:
+        ps.run(10.0, 0.01, method="euler", between_steps=lambda system, t0: None)
+    assert ps.t == pytest.approx(info.value.t) and np.all(np.isfinite(ps.X)) and ps.t > 0
+
+
+def test_set_state_replaces_the_state_of_the_same_particles():
+    """set_state copies a new state and time in; another shape, NaNs or moving pins are refused."""
+    ps = ParticleSystem([[0.0, 0.0], [1.0, 0.0]], pinned=[0])
+    X = np.zeros((2, 2, 2))
+    X[1, 0] = [2.0, 3.0]
+    ps.set_state(X, t=1.5)
+    X[1, 0] = 0.0
+    np.testing.assert_array_equal(ps.X[1, 0], [2.0, 3.0])
+    assert ps.t == 1.5 and ps.X.flags.f_contiguous
+    for bad, match in ((np.zeros((3, 2, 2)), "X must have shape"), (np.full((2, 2, 2), np.nan), "finite"),
+                       (np.ones((2, 2, 2)), "v of pinned particles must be zero")):
+        with pytest.raises(ValueError, match=match):
+            ps.set_state(bad)
+
+
+def test_run_accepts_solver_objects_and_refuses_another_systems():
+    """A solver object (step(X, t, h), order) runs in the loop; one built for another system is refused."""
+    from particles.steppers import Solver
+
+    class ExactDrift(Solver):
+        """x' = x + h v: exact for free particles."""
+        order = 99
+
+        def step(self, X, t, h):
+            X_new = np.array(X, order="F")
+            X_new[:, 0] += h * X[:, 1]
+            return X_new
+
+    ps = ParticleSystem([[0.0, 0.0]], v=[[1.0, 2.0]])
+    t, X = ps.run(1.0, 0.25, method=ExactDrift(ps))
+    np.testing.assert_allclose(X[-1, 0, 0], [1.0, 2.0])
+    ps.step(0.5, method=ExactDrift(ps))
+    np.testing.assert_allclose(ps.X[0, 0], [1.5, 3.0])
+    with pytest.raises(ValueError, match="ExactDrift built for another system"):
+        ps.run(2.0, 0.25, method=ExactDrift(ParticleSystem([[0.0, 0.0]])))
+
+
+def test_a_tiny_step_is_one_step():
+    """step(h) lands on t + h in one step even when h is far below the round-off of t."""
+    ps = ParticleSystem([[0.0, 0.0]], v=[[1.0, 0.0]], t=1.0)
+    ps.step(1e-8, method="euler")
+    assert ps.t == 1.0 + 1e-8
+
+
+def test_a_stepper_object_with_a_step_attribute_stays_a_stepper():
+    """A thermostat wrapping Verlet (callable, with a .step attribute) is a stepper; a Solver is a solver."""
+    from particles.steppers import Solver, as_stepper, is_solver
+    from particles.thermostats import Berendsen
+
+    thermostat = Berendsen(T=1.0, tau=0.1, step="verlet")
+    assert not is_solver(thermostat) and as_stepper(thermostat) is thermostat
+    solver = Solver(ParticleSystem([[0.0, 0.0]]))
+    assert is_solver(solver) and as_stepper(solver).solver is solver

@@ -12,7 +12,10 @@ the command line.
 * :mod:`~particles.studies.discretization`: the same cloth at several
   resolutions, with naive and physical parameters;
 * :mod:`~particles.studies.bounce`: a dropped ball, restitution, and the
-  two fixes of the overshooting problem (projection and backtracking).
+  two fixes of the overshooting problem (projection and backtracking);
+* :mod:`~particles.studies.pbd`: PBD and XPBD on the curtain and the stiff
+  cloth of lecture 7 (effective stiffness against iterations and the step,
+  substeps against iterations).
 """
 
 from .order import convergence_study, fit_order, format_table, global_error, plot_convergence

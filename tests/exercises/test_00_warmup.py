@@ -180,19 +180,19 @@ def _run_hints(f, X0, t0, h, n):
     }
 
 
-def _check_run(got, f, X0, t0, h, n, call, hidden=False):
+def _check_run(got, f, X0, t0, h, n, call, reveal=True):
     if not isinstance(got, tuple) or len(got) != 2:
         kind = describe_value(got) if not isinstance(got, tuple) else f"a tuple of {len(got)} values"
         raise GradingFailure(f"{call} returned {kind}, expected the tuple (t, X)")
     t_ref, X_ref = _reference_run(f, X0, t0, h, n)
     records = "n_steps steps make n_steps + 1 records, t0 and X0 included"
-    expect_array(got[0], t_ref, f"the times t of {call}", rtol=1e-9, show_values=not hidden, hints={
+    expect_array(got[0], t_ref, f"the times t of {call}", rtol=1e-9, show_values=reveal, hints={
         f"the times without the last one: {records}": t_ref[:-1],
         f"the times after each step, without t0: {records}": t_ref[1:],
         "times that start at t0 + h instead of t0": t_ref + h,
         "times that start at 0 instead of t0": t_ref - t0,
     })
-    expect_array(got[1], X_ref, f"the states X of {call}", rtol=1e-9, show_values=not hidden,
+    expect_array(got[1], X_ref, f"the states X of {call}", rtol=1e-9, show_values=reveal,
                  hints=dict({f"the states without the last one: {records}": X_ref[:-1],
                              f"the states after each step, without X0: {records}": X_ref[1:]},
                             **_run_hints(f, X0, t0, h, n)))
@@ -216,4 +216,4 @@ def test_run_random(student, rng):
     X0, t0, h = _random_state(rng, n, d), rng.uniform(0.0, 5.0), rng.uniform(0.005, 0.05)
     _check_run(student.call("run", f, X0, t0, h, steps, check_inputs=True), f, X0, t0, h, steps,
                f"run(f, X0 of shape {X0.shape}, t0, h, n_steps) on a driven oscillator (random X0, t0, h and "
-               "n_steps)", hidden=True)
+               "n_steps)", reveal=False)

@@ -1,0 +1,43 @@
+"""Vector helpers shared by the library's modules (private to the package).
+
+One helper, :func:`unit`, for the two layouts the library uses: columns of a
+``(dim, s)`` array (pair differences from :func:`particles.pairs.pair_differences`,
+one column per spring or pair) and rows of an ``(n, dim)`` array (gradients
+of implicit surfaces, one row per particle).
+"""
+
+import numpy as np
+
+__all__ = ["unit"]
+
+
+def unit(d, axis=0):
+    """Lengths and unit vectors of the vectors stored along `axis` of `d`; ``u = 0`` where ``L = 0``.
+
+    Parameters
+    ----------
+    d : ndarray, shape (dim, s) for ``axis=0`` or (n, dim) for ``axis=1``
+        The vectors: columns (``axis=0``) or rows (``axis=1``).
+    axis : {0, 1}
+        The axis along which the components of one vector lie.
+
+    Returns
+    -------
+    L : ndarray, shape (s,) or (n,)
+        Lengths ``|d_k|``.
+    u : ndarray, shape of `d`
+        ``d_k / |d_k|``, zero for vectors of length zero.
+
+    Examples
+    --------
+    >>> L, u = unit(np.array([[3.0, 0.0], [4.0, 0.0]]))     # two columns: (3, 4) and (0, 0)
+    >>> L.tolist(), u.tolist()
+    ([5.0, 0.0], [[0.6, 0.0], [0.8, 0.0]])
+    """
+    if axis == 0:
+        L = np.sqrt(np.einsum("as,as->s", d, d))
+        return L, np.divide(d, L, out=np.zeros_like(d), where=L != 0)
+    if axis == 1:
+        L = np.sqrt(np.einsum("ij,ij->i", d, d))
+        return L, np.divide(d, L[:, None], out=np.zeros_like(d), where=L[:, None] != 0)
+    raise ValueError(f"axis must be 0 (columns) or 1 (rows), got {axis!r}")
