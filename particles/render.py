@@ -505,7 +505,7 @@ def plot_damped_spring(data):
                  f"(predicted {rate:.3f}), {settled}")
     ax.title.set_fontsize(10)
     ax.legend(fontsize=8, loc="upper right")
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.08, right=0.98, bottom=0.15, top=0.9)  # the same for every value
     return fig
 
 
@@ -532,7 +532,7 @@ def plot_bounces(data):
     for a in (ax, ax_k):
         a.title.set_fontsize(9)
     ax_k.legend(fontsize=8)
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.08, right=0.98, bottom=0.15, top=0.84, wspace=0.3)  # the same for every value
     return fig
 
 
@@ -563,7 +563,7 @@ def plot_time_step(data):
              title=f"h = {1000 * data['h']:.3f} ms = {data['h'] / data['h_max']:.2f} h_max: {verdict}")
     for a in (ax, ax_s):
         a.title.set_fontsize(9)
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.08, right=0.98, bottom=0.15, top=0.9, wspace=0.3)  # the same for every value
     return fig
 
 
@@ -580,12 +580,13 @@ def plot_provot_passes(data):
     ax_s.plot(data["t"], 100 * data["strain"], lw=1.2, label="largest structural strain")
     ax_s.axhline(100 * data["max_strain"], color="grey", ls=":", label="Provot's limit")
     ax_s.set(xlabel="time t (s)", ylabel="strain (%)", ylim=(0, 50), xlim=(0, data["t"][-1]),
-             title=f"at most {data['passes']} passes per step (used {data['mean_passes']:.1f} on average): "
+             title=f"at most {data['passes']} pass{'es' if data['passes'] > 1 else ''} per step "
+                   f"(used {data['mean_passes']:.1f} on average): "
                    f"largest strain {100 * data['strain'].max():.1f}%")
     ax_s.legend(fontsize=8)
     for a in (ax, ax_s):
         a.title.set_fontsize(9)
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.08, right=0.98, bottom=0.15, top=0.9, wspace=0.3)  # the same for every value
     return fig
 
 

@@ -200,7 +200,7 @@ def test_provot_strain_falls_with_the_passes_allowed():
         exp.value = passes
         largest[passes] = exp.data["strain"].max()
         assert exp.data["mean_passes"] <= passes
-        assert f"at most {passes} passes" in exp.figure.axes[1].get_title()
+        assert f"at most {passes} pass{'es' if passes > 1 else ''} per step" in exp.figure.axes[1].get_title()
     assert largest[1] > largest[10] > largest[50] > 0.1
     assert [round(100 * largest[p]) for p in (1, 10, 50)] == [41, 19, 12]
 
