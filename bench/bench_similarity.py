@@ -1,6 +1,6 @@
 """Similarity report on a synthetic class: 300 submissions of 02_stiffness (9 asked functions each).
 
-The class is made by ``tests/test_similarity.py::write_synthetic``: about a
+The class is made by ``tests/course/test_similarity.py::write_synthetic``: about a
 third of the functions are the master's with renamed variables, half are
 mutated (one to three inserted statements, changed constants), a fifth are
 rewritten from random statements, and ten students copy every function of

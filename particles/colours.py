@@ -9,7 +9,7 @@ run where Matplotlib is not installed. :func:`to_rgb` reads the colours a
 student writes (hex strings, grey levels, RGB tuples and the basic names)
 itself, and asks Matplotlib, imported only then, about the other names
 (``"tab:blue"``, ``"xkcd:sky blue"``). The values are Matplotlib's, to the
-last bit (``tests/test_colours.py``).
+last bit (``tests/library/test_colours.py``).
 """
 
 import numpy as np

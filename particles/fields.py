@@ -11,7 +11,7 @@ one place (:meth:`particles.ParticleSystem.total_force`). Calling a force,
 testing and plotting it. The contract every force keeps (it does not modify
 its inputs, conservative forces are minus the gradient of their
 ``potential_energy``, internal forces conserve momentum) is tested for every
-subclass in ``tests/test_force_contract.py``.
+subclass in ``tests/library/test_force_contract.py``.
 
 The forces here act on each particle alone, as in the lecture:
 

@@ -13,7 +13,7 @@ The weighted sum is limited to a largest steering acceleration, and the speed
 to a range, as for a real animal. Neighbours are found with the bucket grid
 of :mod:`particles.neighbors` in O(n), never by testing all pairs.
 
-Measured behaviour (tests/test_flocking.py): from random headings the
+Measured behaviour (tests/library/test_flocking.py): from random headings the
 *polarization* ``|mean_i v_i / |v_i||`` (0 for random headings, 1 when all
 fly the same way) rises above 0.9 with alignment on, and the flock keeps a
 bounded size with cohesion on.

@@ -22,7 +22,7 @@ one gathers them (``from particles.forces import Gravity, LennardJones``):
   models; :mod:`particles.flocking`: Reynolds' boids.
 
 The contract every force keeps is tested for every subclass of
-:class:`Force` in the package (``tests/test_force_contract.py``): it does not
+:class:`Force` in the package (``tests/library/test_force_contract.py``): it does not
 modify its inputs; ``add_to`` adds into ``F`` and leaves its shape and dtype;
 a force with a ``potential_energy`` is minus its gradient; a force between
 particles conserves the total momentum; ``uses_velocity = False`` and

@@ -40,7 +40,7 @@ innermost and the collisions with bodies outermost, so that no particle ends
 a step inside a body. The body's fix then runs after the push and may undo
 part of it (a particle of a lower layer pushed into the floor is moved back
 up): with two sheets resting on a floor, the closest pair measured 0.989
-``thickness`` in ``tests/test_selfcollision.py``.
+``thickness`` in ``tests/library/test_selfcollision.py``.
 
 Limits: only particle-particle proximity is tested, at the end of a step.
 A particle can slip between two others of a sheet when ``thickness`` is less

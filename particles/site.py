@@ -20,7 +20,7 @@ player instead of a live widget.
 
 Every page starts with a tiny script that records JavaScript errors in the
 ``data-js-errors`` attribute of the ``<html>`` element; a headless browser
-(see ``tests/test_site.py``) reads it to check that the pages run cleanly.
+(see ``tests/course/test_site.py``) reads it to check that the pages run cleanly.
 """
 
 import copy

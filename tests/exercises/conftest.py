@@ -1,7 +1,7 @@
 """The exercise tests' own fixture: ``rng`` can record what a hidden test drew.
 
 When the environment variable ``PARTICLES_RECORD_DRAWS`` names a folder (the
-grader's tests set it, see ``tests/grader/exercise_corpus.py``), the ``rng``
+grader's tests set it, see ``tests/course/grader/exercise_corpus.py``), the ``rng``
 of every test is the plugin's generator behind a recorder: each number it
 returns is kept, and at the end of the test one JSON line
 ``{"notebook", "seed", "test", "scalars", "arrays"}`` is appended to a file of

@@ -10,7 +10,7 @@ import pytest
 
 import particles
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MODULES = sorted(
     name for _, name, _ in pkgutil.walk_packages(particles.__path__, "particles.")
     if not name.endswith("__main__")

@@ -9,7 +9,7 @@
   the student's work starts, e.g. an import that release dropped) and that
   every cell that fails after it fails because of that missing work or its
   consequences. Structure (stubs, no leaked solution) is checked in
-  ``tests/test_release.py``.
+  ``tests/course/test_release.py``.
 """
 
 import re
@@ -19,7 +19,7 @@ import nbformat
 import pytest
 from nbclient import NotebookClient
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 LECTURES = sorted((ROOT / "lectures").glob("[0-9][0-9]_*.ipynb"))
 MASTERS = sorted((ROOT / "solutions").glob("*.ipynb"))
 EXERCISES = sorted((ROOT / "exercises").glob("*.ipynb"))

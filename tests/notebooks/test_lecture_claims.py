@@ -10,8 +10,8 @@ the number, ``prose`` is the text the lecture's markdown must contain, so that
 prose and output cannot drift apart again.
 
 The notebooks are executed once per test session by the ``executed_lecture``
-fixture (``tests/conftest.py``), shared with ``tests/test_notebooks.py`` and
-``tests/test_site.py``.
+fixture (``tests/conftest.py``), shared with ``tests/notebooks/test_notebooks.py`` and
+``tests/course/test_site.py``.
 """
 
 import math
@@ -22,7 +22,7 @@ from pathlib import Path
 import nbformat
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 AT_LEAST = (0.0, math.inf)  # tolerance of a lower bound: value >= expected
 
 Claim = namedtuple("Claim", "lecture claim pattern expected tolerance prose")

@@ -12,7 +12,7 @@ import pytest
 
 from particles.course.release import ReleaseError, public_tests, release, release_notebook, write_bundle
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _master(*cells):

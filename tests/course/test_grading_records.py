@@ -17,7 +17,7 @@ from particles.course import isolation  # noqa: E402
 from particles.course.discovery import Unit  # noqa: E402
 from particles.course.grading import LibraryChanged, grade, grade_batch  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 HOSTILE = '''
 import os, signal, glob

@@ -16,7 +16,7 @@ from particles.course.registry import remote
 from particles.course.release import release
 from particles.course.runner import GradingFailure, Submission
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 SOURCE = """
 import os, socket, subprocess, time

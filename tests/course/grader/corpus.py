@@ -15,7 +15,7 @@ from pathlib import Path
 
 import exercise_corpus  # this folder is on sys.path (see test_corpus.py)
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 MASTER = ROOT / "solutions" / "00_warmup.ipynb"
 STUB = ROOT / "exercises" / "00_warmup.ipynb"
 

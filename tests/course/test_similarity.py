@@ -17,7 +17,7 @@ import particles.massspring
 from particles.cli import main
 from particles.course.similarity import fingerprint, score, similarity
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EX01, EX00, EX02 = "01_integrator_order", "00_warmup", "02_stiffness"
 
 

@@ -1,6 +1,6 @@
 """Corpora of wrong and alternative submissions for the exercises 01 onwards.
 
-Each exercise ``NN_topic`` has a module ``tests/grader/cases_NN_topic.py`` that
+Each exercise ``NN_topic`` has a module ``tests/course/grader/cases_NN_topic.py`` that
 defines
 
 * ``EXERCISE = "NN_topic"``;
@@ -31,7 +31,7 @@ import os
 import re
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 HERE = Path(__file__).resolve().parent
 
 

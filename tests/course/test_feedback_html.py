@@ -19,11 +19,11 @@ from particles.course.figures import MAX_POINTS, Feedback, curve_spec, png
 from particles.course.grading import LibraryChanged, grade
 from particles.course.reports import feedback_html, gradescope_results
 
-from .browser import find_or_install_chromium
+from ..browser import find_or_install_chromium
 from .grader.exercise_corpus import build
 from .grader import cases_01_integrator_order, cases_02_stiffness, cases_03_provot, cases_04_discretization
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 # one wrong submission per exercise where a curve is the point, each failing a test that draws one
 WRONG = {"01_integrator_order": (cases_01_integrator_order, "trapezoid_uneven_weights"),

@@ -23,7 +23,7 @@ import nbformat
 import pytest
 from IPython.core.inputtransformer2 import TransformerManager
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOKS = (sorted((ROOT / "lectures").glob("[0-9][0-9]_*.ipynb"))
              + sorted((ROOT / "solutions").glob("*.ipynb")))
 NAMES = [p.relative_to(ROOT).as_posix() for p in NOTEBOOKS]

@@ -15,9 +15,9 @@ import pytest
 
 from particles.site import MATHJAX, MATHJAX_SCRIPTS, build_site, lecture_notebooks, notebook_summary
 
-from .browser import Browser, find_or_install_chromium, load
+from ..browser import Browser, find_or_install_chromium, load
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def notebook(title, *code, prose="More text."):

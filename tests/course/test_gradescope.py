@@ -15,7 +15,7 @@ from particles.course import isolation
 
 from particles.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ import pytest
 import particles
 from particles.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_grade_a_folder_of_students(tmp_path, capsys):

@@ -19,7 +19,7 @@ import pytest
 from particles import explore, render
 from particles.explore import STATIC, Exploration
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def toy(calls=None):

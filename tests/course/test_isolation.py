@@ -22,7 +22,7 @@ from particles.course import isolation
 from particles.course.code import SubmissionCode
 from particles.course.runner import Submission
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MASTER = ROOT / "solutions" / "00_warmup.ipynb"
 LIBRARY = ROOT / "particles"
 FOUND = isolation.probe()
