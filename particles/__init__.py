@@ -11,7 +11,8 @@ particle effects with lifetimes (:mod:`particles.emitters`,
 (:mod:`particles.flocking`), mass-spring models with Provot's constraint,
 implicit solvers and cloth self-collision (:mod:`particles.massspring`,
 :mod:`particles.constraints`, :mod:`particles.implicit`,
-:mod:`particles.selfcollision`), molecular dynamics in a periodic box
+:mod:`particles.selfcollision`), position-based constraints and rigid rods
+(:mod:`particles.xpbd`, :mod:`particles.pbdconstraints`, :mod:`particles.rigid`), molecular dynamics in a periodic box
 (:mod:`particles.periodic`, :mod:`particles.thermostats`,
 :mod:`particles.liquids`, :mod:`particles.statistics`) and drawing
 (:mod:`particles.render`, imported on demand because it loads Matplotlib's
@@ -24,8 +25,8 @@ pyplot). ``CONTRIBUTING.md`` describes the layout and the data flow of a step.
 """
 
 from . import (collisions, colours, constraints, effects, emitters, flocking, forces, implicit, integrators,
-               liquids, massspring, neighbors, periodic, selfcollision, springs, statistics, steppers, surfaces,
-               thermostats)
+               liquids, massspring, neighbors, pbdconstraints, periodic, rigid, selfcollision, springs, statistics,
+               steppers, surfaces, thermostats, xpbd)
 from .collisions import Collider
 from .effects import ParticleEffect
 from .errors import ConvergenceError, SimulationDiverged
@@ -72,4 +73,7 @@ __all__ = [
     "statistics",
     "liquids",
     "steppers",
+    "xpbd",
+    "pbdconstraints",
+    "rigid",
 ]

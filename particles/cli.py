@@ -34,7 +34,7 @@ def _study(args):
 
 
 def _site(args):
-    from .site import build_site
+    from .course.site import build_site
 
     try:
         build_site(args.out, args.lectures, timeout=args.timeout)
@@ -82,12 +82,9 @@ def _release(args):
 def _grade(args):
     from .course.grading import LibraryChanged, grade
     from .course.isolation import IsolationUnavailable
-    from .course.reports import score_of
-
     def progress(result):
-        score, top = score_of(result["tests"])
-        print(f"  graded {result['student']:<24} {result['exercise']:<16} {score:>5g} / {top:<5g}"
-              f" ({result['seconds']:.1f} s)", flush=True)
+        print(f"  graded {result.student:<24} {result.exercise:<16} {result.score:>5g} / {result.max_score:<5g}"
+              f" ({result.seconds:.1f} s)", flush=True)
 
     try:
         summary = grade(
@@ -112,7 +109,7 @@ def _grade(args):
         print()
         print(f"{'student':<24}" + "".join(f"{e:>14}" for e in exercises) + f"{'total':>12}")
         for student, results in sorted(summary["students"].items()):
-            by = {r["exercise"]: score_of(r["tests"]) for r in results}
+            by = {r.exercise: (r.score, r.max_score) for r in results}
             cells = "".join(f"{(f'{by[e][0]:g}/{by[e][1]:g}' if e in by else '-'):>14}" for e in exercises)
             total = sum(s for s, _ in by.values()), sum(m for _, m in by.values())
             print(f"{student:<24}{cells}{f'{total[0]:g}/{total[1]:g}':>12}")

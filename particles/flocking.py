@@ -207,6 +207,9 @@ class Containment(Force):
         Acceleration at the wall, in m/s^2.
     """
 
+    uses_velocity = False
+    uses_time = False
+
     def __init__(self, lo, hi, margin=1.0, strength=2.0):
         self.lo = as_float_array(lo, "lo", ndim=1)
         self.hi = as_float_array(hi, "hi", shape=self.lo.shape)

@@ -511,10 +511,14 @@ def step_times(t0, t1, h):
     if t1 < t0:
         raise ValueError(f"t1 must be >= t0, got t0={t0!r}, t1={t1!r}")
     h = positive_number(h, "h", "seconds")
-    n_steps = max(1, math.ceil((t1 - t0) / h - 1e-9)) if t1 > t0 else 0
-    t = t0 + h * np.arange(n_steps + 1)
-    t[-1] = t1
-    return t
+    if t1 == t0:
+        return np.array([t0])
+    n_steps = max(1, math.ceil((t1 - t0) / h - 1e-9))
+    inner = t0 + h * np.arange(1, n_steps)
+    # far from 0, t0 + k h rounds: an inner time can land on (or within 1e-9 h of) t1 and leave a step of
+    # length zero; such a time is merged into the last step
+    inner = inner[inner < t1 - 1e-9 * h]
+    return np.concatenate([[t0], inner, [t1]])
 
 
 BLOWUP_FACTOR = 1e12

@@ -9,7 +9,7 @@ import numpy as np
 
 from .errors import ConvergenceError
 from .fields import Damping, Gravity, Wind
-from .implicit import BaraffWitkin
+from .baraffwitkin import BaraffWitkin
 
 __all__ = ["relax"]
 

@@ -29,7 +29,7 @@ def executed_lecture(tmp_path_factory, request):
 
     import nbformat
 
-    from particles.site import execute_notebook
+    from particles.course.site import execute_notebook
 
     shared = hasattr(request.config, "workerinput")  # an xdist worker: the base folder is per worker
     base = tmp_path_factory.getbasetemp()

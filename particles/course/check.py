@@ -35,7 +35,7 @@ class CheckResult:
     ----------
     exercise : str
     score, max_score : float
-    tests : list of dict
+    tests : list of particles.course.records.TestRecord
         One record per public test: ``name``, ``points``, ``passed``, ``reason``
         and, when the test drew some, ``figures``.
     notes : list of str
@@ -44,21 +44,21 @@ class CheckResult:
 
     def __init__(self, exercise, tests, notes, source):
         self.exercise, self.tests, self.notes, self.source = exercise, tests, notes, source
-        self.score = sum(t["points"] for t in tests if t["passed"])
-        self.max_score = sum(t["points"] for t in tests)
+        self.score = sum(t.score for t in tests)
+        self.max_score = sum(t.points for t in tests)
 
     @property
     def passed(self):
         """True when every public test passed."""
-        return all(t["passed"] for t in self.tests)
+        return all(t.passed for t in self.tests)
 
     def __str__(self):
         lines = [f"{self.exercise}: {self.score:g} / {self.max_score:g} points on the public tests "
                  f"(checked {self.source})"]
         for t in self.tests:
-            lines.append(f"  {'PASS' if t['passed'] else 'FAIL'}  {t['name']}")
-            if not t["passed"]:
-                lines.append(f"        {t['reason']}")
+            lines.append(f"  {'PASS' if t.passed else 'FAIL'}  {t.name}")
+            if not t.passed:
+                lines.append(f"        {t.reason}")
         lines += [f"  note: {n}" for n in self.notes]
         if self.passed:
             lines.append("All public tests pass. The autograder adds hidden tests with random parameters.")
@@ -70,8 +70,8 @@ class CheckResult:
         rows = [f"**{self.exercise}: {self.score:g} / {self.max_score:g} points on the public tests** "
                 f"(checked {self.source})", "", "| | test | what to fix |", "| --- | --- | --- |"]
         for t in self.tests:
-            reason = "" if t["passed"] else t["reason"].replace("|", "\\|")
-            rows.append(f"| {'✅' if t['passed'] else '❌'} | {t['name']} | {reason} |")
+            reason = "" if t.passed else t.reason.replace("|", "\\|")
+            rows.append(f"| {'✅' if t.passed else '❌'} | {t.name} | {reason} |")
         rows += [""] + [f"- {n}" for n in self.notes]
         if self.passed:
             rows.append("All public tests pass. The autograder adds hidden tests with random parameters.")
@@ -88,14 +88,14 @@ class CheckResult:
                 '<table><thead><tr><th></th><th style="text-align:left">test</th>'
                 '<th style="text-align:left">what to fix</th></tr></thead><tbody>']
         for t in self.tests:
-            reason = "" if t["passed"] else e(t["reason"])
-            rows.append(f"<tr><td>{'✅' if t['passed'] else '❌'}</td><td style=\"text-align:left\">{e(t['name'])}</td>"
+            reason = "" if t.passed else e(t.reason)
+            rows.append(f"<tr><td>{'✅' if t.passed else '❌'}</td><td style=\"text-align:left\">{e(t.name)}</td>"
                         f"<td style=\"text-align:left\">{reason}</td></tr>")
-            if t.get("figures"):  # open under a failed test, folded under a passed one
+            if t.figures:  # open under a failed test, folded under a passed one
                 shown = "".join(f'<div style="display:inline-block;margin:0 .5em .5em 0">'
-                                f"{figures.figure_html(f, css=False)}</div>" for f in t["figures"])
+                                f"{figures.figure_html(f, css=False)}</div>" for f in t.figures)
                 rows.append(f'<tr><td></td><td colspan="2" style="text-align:left"><details'
-                            f'{"" if t["passed"] else " open"}><summary>your curve beside the reference</summary>'
+                            f'{"" if t.passed else " open"}><summary>your curve beside the reference</summary>'
                             f"{shown}</details></td></tr>")
         rows.append("</tbody></table>")
         if self.notes:
@@ -163,11 +163,11 @@ def check(exercise, notebook=None, *, time_limit=None, root=None):
         else:
             path, source, labels = Path(notebook), f"the saved notebook {notebook}", {}
         result = grade_unit(Unit("you", exercise, path), root, public_only=True, time_limit=time_limit)
-    records = result["tests"]
+    records = result.tests
     for record in records:  # speak of "In [5]" rather than the temporary notebook's cell numbers
         for cell, label in sorted(labels.items(), key=lambda kv: -len(kv[0])):
-            record["reason"] = record["reason"].replace(cell, label)
-    notes = [n for n in result["notes"]]
+            record.reason = record.reason.replace(cell, label)
+    notes = list(result.notes)
     for cell, label in sorted(labels.items(), key=lambda kv: -len(kv[0])):
         notes = [n.replace(cell, label) for n in notes]
     return CheckResult(exercise, records, notes, source)

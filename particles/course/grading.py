@@ -53,8 +53,9 @@ from . import isolation as isolation_module
 from .discovery import Unit, find_submissions, notebook_digest, written_answers
 from .paths import exercise_tests, project_root
 from .process import library_parent
+from .records import SessionRecord, SubmissionRecord, TestRecord
 from .reports import feedback_html, feedback_markdown, gradescope_results, write_gradebook, write_json
-from .runner import check_limit
+from .limits import check_limit
 from .signing import TOKEN_FD, read_records, sign_records
 from .store import RecordStore
 
@@ -125,32 +126,34 @@ def catalog(root, exercise, public_only=False, python=None):
 
 
 def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None):
-    records = list(data.get("tests", []))
+    """The :class:`SubmissionRecord` of `unit` from its session's record `data` (None: the session gave none)."""
+    session = data if data is not None else SessionRecord(id="", seed=seed)
+    records = list(session.tests)
     if tests is not None:  # make sure every expected test has a record
-        seen = {r["test"] for r in records}
+        seen = {r.test for r in records}
         why = (f"not run: grading stopped early ({trouble or f'pytest exit status {status}'}); "
                "the instructor has the log")
-        records += [dict(t, passed=False, reason=why, seed=None) for t in tests if t["test"] not in seen]
+        records += [TestRecord.from_dict(t).failed(why) for t in tests if t["test"] not in seen]
     notes = []
-    for error in data.get("load_errors", []):
+    for error in session.load_errors:
         where = f" ({error['where']})" if error.get("where") else ""
         notes.append(f"While loading your notebook, {error['label']}{where} raised "
                      f"{error['type']}: {error['message']}")
-    for label, message in data.get("syntax_errors", []):
+    for label, message in session.syntax_errors:
         notes.append(f"{label} has a syntax error ({message}) and was not run")
-    if data.get("restarts", 1) > 1:
-        notes.append(f"The worker running your code was restarted {data['restarts'] - 1} time(s) "
+    if session.restarts > 1:
+        notes.append(f"The worker running your code was restarted {session.restarts - 1} time(s) "
                      "after a timeout or a crash")
     written = written_answers(unit.notebook, root, unit.exercise) if root is not None else None
     if written and written["asked"]:
         notes.append(f"Written answers: {written['answered']} of {written['asked']} filled in; they are read "
                      "and graded by your instructor, not by the autograder")
-    layers = data.get("isolation") or {}
-    return {"student": unit.student, "exercise": unit.exercise, "notebook": str(unit.notebook), "seed": seed,
-            "seconds": round(data.get("seconds", seconds), 2), "tests": records, "notes": notes,
-            "written_answers": written, "grader_status": status, "complete": "seconds" in data,
-            "isolation": layers, "sandbox": isolation_module.describe(layers),
-            "notebook_sha256": notebook_digest(unit.notebook)}
+    layers = session.isolation or {}
+    return SubmissionRecord(
+        student=unit.student, exercise=unit.exercise, notebook=str(unit.notebook), seed=seed,
+        seconds=round(session.seconds if session.complete else seconds, 2), tests=records, notes=notes,
+        written_answers=written, grader_status=status, complete=session.complete, isolation=layers,
+        sandbox=isolation_module.describe(layers), notebook_sha256=notebook_digest(unit.notebook))
 
 
 def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, memory_mb=None, private=(),
@@ -185,10 +188,9 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
 
     Returns
     -------
-    list of dict
-        Per unit: ``student``, ``exercise``, ``notebook``, ``seed``,
-        ``seconds``, ``tests`` (records), ``notes`` (lines about loading the
-        notebook), ``complete`` (every test has its own record).
+    list of SubmissionRecord
+        One per unit, in order (``complete`` is False when its session did
+        not finish it: its missing tests are recorded as failed, "not run").
 
     Raises
     ------
@@ -244,22 +246,26 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
             data = read_records(results, token)
             if data is None:
                 data, trouble = {}, "the session's records were missing or not the ones it signed"
+        try:
+            data = {key: SessionRecord.from_dict(record) for key, record in data.items()}
+        except (TypeError, ValueError) as error:
+            data, trouble = {}, f"the session's records could not be read ({error})"
         if trouble is not None:
             output += f"\nparticles grade: records of this session discarded: {trouble}\n"
         if log is not None:
             Path(log).write_text(output)
     elapsed = time.perf_counter() - start
-    if tests is None and any("seconds" not in data.get(str(k), {}) for k in range(len(units))):
+    if tests is None and any(str(k) not in data or not data[str(k)].complete for k in range(len(units))):
         try:
             tests = catalog(root, units[0].exercise, public_only, python)
         except RuntimeError:
             tests = []
-    return [_result(u, seed, data.get(str(k), {}), status, tests, elapsed / len(units), trouble, root)
+    return [_result(u, seed, data.get(str(k)), status, tests, elapsed / len(units), trouble, root)
             for k, (u, seed) in enumerate(zip(units, seeds))]
 
 
 def grade_unit(unit, root, *, seed=None, **options):
-    """Grade one notebook (see :func:`grade_batch`); returns its result dict."""
+    """Grade one notebook (see :func:`grade_batch`); returns its :class:`SubmissionRecord`."""
     return grade_batch([unit], root, seeds=None if seed is None else [seed], **options)[0]
 
 
@@ -382,11 +388,11 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     def finished(results):
         with lock:
             for result in results:
-                done[(result["student"], result["exercise"])] = result
+                done[(result.student, result.exercise)] = result
                 if store is not None:
                     store.save(result)
             if out is not None:  # what a stopped run leaves is already usable
-                _write_outputs(out, done, tests, hidden_visibility, students=[r["student"] for r in results])
+                _write_outputs(out, done, tests, hidden_visibility, students=[r.student for r in results])
         if progress is not None:
             for result in results:
                 progress(result)
@@ -399,7 +405,7 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
                               memory_mb=memory_mb, private=private, python=python, log=log, isolation=plan)
         if len(batch) > 1:  # a session that stopped early: grade its unfinished notebooks alone
             for i, (unit, result) in enumerate(zip(batch, results)):
-                if not result["complete"]:
+                if not result.complete:
                     retry_log = out / "logs" / f"{unit.student}-{unit.exercise}.log" if out is not None else None
                     results[i] = grade_unit(unit, root, seed=seeds[i], public_only=public_only,
                                             time_limit=time_limit, memory_mb=memory_mb, private=private,
@@ -413,9 +419,9 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     results = [done[(u.student, u.exercise)] for u in units]
     students = {}
     for result in results:
-        students.setdefault(result["student"], []).append(result)
+        students.setdefault(result.student, []).append(result)
     exercises = [name for name in tests if any(u.exercise == name for u in units)]
-    layers = [r.get("isolation") for r in results if r.get("isolation")]
+    layers = [r.isolation for r in results if r.isolation]
     summary = {"students": students, "exercises": exercises, "problems": problems,
                "isolation": isolation_module.describe(layers[0] if layers else {}) if results else
                f"planned: {plan.to_option()}", "resumed": len(units) - len(todo)}
@@ -430,9 +436,8 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         if not results and exercise is not None:  # nothing gradable was submitted: every test fails, saying why
             why = "no notebook for this exercise was found in your submission" if not problems else problems[0]
             tests_of = catalog(root, exercise, public_only, python)
-            results = [{"student": "submission", "exercise": exercise, "notebook": "", "seed": None, "seconds": 0.0,
-                        "tests": [dict(t, passed=False, reason=why) for t in tests_of], "notes": [],
-                        "sandbox": summary["isolation"]}]
+            results = [SubmissionRecord(student="submission", exercise=exercise, sandbox=summary["isolation"],
+                                        tests=[TestRecord.from_dict(t).failed(why) for t in tests_of])]
         data = gradescope_results("submission", results, hidden_visibility)
         if problems:
             data["output"] = "\n".join([data["output"], *problems]).strip()
@@ -460,12 +465,13 @@ def _write_outputs(out, done, tests, hidden_visibility, students=None):
         by_student.setdefault(student, []).append(result)
     order = {name: k for k, name in enumerate(tests)}
     for results in by_student.values():
-        results.sort(key=lambda r: order.get(r["exercise"], len(order)))
+        results.sort(key=lambda r: order.get(r.exercise, len(order)))
     for student in (by_student if students is None else set(students)):
         folder = out / student
         results = by_student[student]
         key = (str(folder.resolve()), hidden_visibility)
-        digest = hashlib.sha256(json.dumps(results, sort_keys=True, default=str).encode()).hexdigest()
+        digest = hashlib.sha256(json.dumps([r.to_dict() for r in results], sort_keys=True,
+                                           default=str).encode()).hexdigest()
         names = ("results.json", "feedback.md", "feedback.html")
         if _written.get(key) == digest and all((folder / name).exists() for name in names):
             continue
@@ -474,5 +480,5 @@ def _write_outputs(out, done, tests, hidden_visibility, students=None):
         (folder / "feedback.md").write_text(feedback_markdown(student, results))
         (folder / "feedback.html").write_text(feedback_html(student, results), encoding="utf-8")
         _written[key] = digest
-    exercises = [name for name in tests if any(r["exercise"] == name for rs in by_student.values() for r in rs)]
+    exercises = [name for name in tests if any(r.exercise == name for rs in by_student.values() for r in rs)]
     write_gradebook(out / "gradebook.csv", by_student, exercises)

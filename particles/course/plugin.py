@@ -71,7 +71,9 @@ from .figures import Feedback
 from .isolation import Plan, protect_this_process
 from .signing import TOKEN_FD, sign_records
 from .paths import project_root
-from .runner import GradingFailure, Submission, check_limit
+from .records import SessionRecord, TestRecord
+from .limits import check_limit
+from .runner import GradingFailure, Submission
 
 __all__ = ["record_of"]
 
@@ -128,7 +130,7 @@ def pytest_configure(config):
     protect_this_process()  # no process of the same uid may read this session's memory or environment
     config._particles_plan = None
     config._particles_seed = seed
-    config._particles_results = {job["id"]: {"id": job["id"], "seed": job["seed"], "tests": []} for job in jobs}
+    config._particles_results = {job["id"]: SessionRecord(id=job["id"], seed=job["seed"]) for job in jobs}
 
 
 def pytest_report_header(config):
@@ -215,17 +217,16 @@ def _particles_submission(request, _particles_job):
     )
     submission.load_failure = problem
     result = config._particles_results[_particles_job["id"]]
-    result.update(exercise=exercise, submission=str(path))
+    result.exercise, result.submission = exercise, str(path)
     yield submission
     submission.close()
-    result.update(
-        restarts=submission.restarts,
-        load_errors=submission.load_errors,
-        skipped=[{"label": s.label, "line": s.line, "text": s.text, "reason": s.reason} for s in submission.code.skipped],
-        syntax_errors=[list(e) for e in submission.code.syntax_errors],
-        isolation=dict(submission.layers or {}, planned=config._particles_plan.to_option()),
-        seconds=round(time.perf_counter() - start, 3),
-    )
+    result.restarts = submission.restarts
+    result.load_errors = list(submission.load_errors)
+    result.skipped = [{"label": s.label, "line": s.line, "text": s.text, "reason": s.reason}
+                      for s in submission.code.skipped]
+    result.syntax_errors = [list(e) for e in submission.code.syntax_errors]
+    result.isolation = dict(submission.layers or {}, planned=config._particles_plan.to_option())
+    result.seconds = round(time.perf_counter() - start, 3)  # last: the notebook is complete
 
 
 @pytest.fixture
@@ -273,28 +274,26 @@ def _reason(excinfo):
 
 
 def record_of(item, outcome, excinfo, seconds):
-    """The JSON-ready record of one test (see :mod:`particles.course.grading`)."""
+    """The :class:`~particles.course.records.TestRecord` of one test."""
     points = item.get_closest_marker("points")
     doc = (getattr(item.obj, "__doc__", None) or item.name).strip().splitlines()[0]
     key = _test_key(item)
     if key.endswith("]"):  # one test function, several parameters: say which one (not the batch job)
         doc = f"{doc} [{key[key.index('[') + 1:-1]}]"
-    record = {
-        "test": _test_key(item),
-        "name": doc,
-        "points": float(points.args[0]) if points and points.args else 1.0,
-        "hidden": item.get_closest_marker("hidden") is not None,
-        "passed": outcome == "passed",
-        "reason": "",
-        "grader_error": False,
-        "seconds": round(seconds, 3),
-        "seed": int(_job_of(item)["seed"]) if getattr(item, "_particles_used_seed", False) else None,
-    }
+    record = TestRecord(
+        test=_test_key(item),
+        name=doc,
+        points=float(points.args[0]) if points and points.args else 1.0,
+        hidden=item.get_closest_marker("hidden") is not None,
+        passed=outcome == "passed",
+        seconds=round(seconds, 3),
+        seed=int(_job_of(item)["seed"]) if getattr(item, "_particles_used_seed", False) else None,
+    )
     if excinfo is not None and outcome != "passed":
-        record["reason"], record["grader_error"] = _reason(excinfo)
+        record.reason, record.grader_error = _reason(excinfo)
     board = getattr(item, "_particles_feedback", None)
     if board is not None and board.figures:  # data only: the driver draws
-        record["figures"] = board.figures
+        record.figures = list(board.figures)
     return record
 
 
@@ -304,7 +303,7 @@ def pytest_runtest_makereport(item, call):
     report = outcome.get_result()
     if not hasattr(item, "_particles_start"):
         item._particles_start = time.perf_counter()
-    records = item.config._particles_results[_job_of(item)["id"]]["tests"]
+    records = item.config._particles_results[_job_of(item)["id"]].tests
     if report.when == "setup" and report.failed:
         records.append(record_of(item, "failed", call.excinfo, time.perf_counter() - item._particles_start))
     elif report.when == "call":
@@ -316,7 +315,8 @@ def pytest_collection_finish(session):
     path = session.config.getoption("--grading-catalog", default=None)
     if path:
         first = session.config._particles_jobs[0]["id"]
-        catalog = [record_of(item, "failed", None, 0.0) for item in session.items if _job_of(item)["id"] == first]
+        catalog = [record_of(item, "failed", None, 0.0).to_dict() for item in session.items
+                   if _job_of(item)["id"] == first]
         Path(path).write_text(json.dumps(catalog, indent=1))
 
 
@@ -325,7 +325,7 @@ def pytest_sessionfinish(session):
     path = config.getoption("--grading-results", default=None)
     if not path:
         return
-    data = {"submissions": list(config._particles_results.values())}
+    data = {"submissions": [record.to_dict() for record in config._particles_results.values()]}
     token = getattr(config, "_particles_token", None)
     if token is None:
         Path(path).write_text(json.dumps(data, indent=1))

@@ -1,10 +1,10 @@
 """What grading writes: Gradescope ``results.json``, a gradebook CSV, Markdown and HTML feedback.
 
-All are made from the same records: per submission (a student), per
-exercise, one record per test with ``test``, ``name``, ``points``,
-``hidden``, ``passed``, ``reason``, ``seed`` and, when the test attached
-some, ``figures`` (see :mod:`particles.course.plugin` and
-:mod:`particles.course.figures`). Figures are drawn here, as inline PNG
+All are made from the same records (:mod:`particles.course.records`): per
+student, one :class:`~particles.course.records.SubmissionRecord` per
+exercise, holding one :class:`~particles.course.records.TestRecord` per
+test; Gradescope's format itself is written by the records
+(:func:`~particles.course.records.to_gradescope`). Figures are drawn here, as inline PNG
 images: in ``feedback.html`` (one self-contained page per student: inline
 CSS and images, no scripts, no network) and in the Gradescope output of
 the tests that have them (``"output_format": "html"``; the others stay
@@ -17,84 +17,24 @@ import html
 import json
 
 from . import figures
+from .records import VISIBILITIES, SubmissionRecord, score_of, to_gradescope
 
-__all__ = ["score_of", "gradescope_results", "feedback_markdown", "feedback_html", "write_gradebook",
-           "VISIBILITIES"]
+__all__ = ["score_of", "gradescope_results", "to_gradescope", "feedback_markdown", "feedback_html",
+           "write_gradebook", "VISIBILITIES"]
 
 figures.load()
-
-VISIBILITIES = ("hidden", "after_due_date", "after_published", "visible")
-"""Gradescope's visibility settings of a test."""
-
-
-def score_of(tests):
-    """(score, max_score) of a list of test records."""
-    return (sum(t["points"] for t in tests if t["passed"]), sum(t["points"] for t in tests))
 
 
 def _fmt(x):
     return f"{x:g}"
 
 
-def _test_output(test, seed):
-    text = "passed" if test["passed"] else test["reason"]
-    if test["hidden"] and test.get("seed") is not None:
-        text += f" (random parameters, seed {test['seed']})"
-    return text
+def _records(results):
+    """`results` as :class:`SubmissionRecord` objects (dicts of JSON data are read as records)."""
+    return [r if isinstance(r, SubmissionRecord) else SubmissionRecord.from_dict(r) for r in results]
 
 
-def gradescope_results(student, results, hidden_visibility="after_published"):
-    """A Gradescope ``results.json`` dict for one submission.
-
-    Parameters
-    ----------
-    student : str
-    results : list of dict
-        One per exercise graded: ``exercise``, ``seed``, ``tests``, ``notes``
-        (lines about loading the notebook) and ``seconds``.
-    hidden_visibility : str
-        Gradescope visibility of hidden tests (one of :data:`VISIBILITIES`).
-    """
-    if hidden_visibility not in VISIBILITIES:
-        raise ValueError(f"hidden_visibility must be one of {VISIBILITIES}, got {hidden_visibility!r}")
-    tests, lines = [], []
-    for result in results:
-        score, top = score_of(result["tests"])
-        lines.append(f"{result['exercise']}: {_fmt(score)} / {_fmt(top)} points")
-        lines += [f"  {note}" for note in result.get("notes", [])]
-        if result.get("sandbox"):
-            lines.append(f"  Sandbox of your code: {result['sandbox']}")
-        for k, test in enumerate(result["tests"], start=1):
-            output, output_format = _test_output(test, result.get("seed")), "text"
-            if test.get("figures"):  # the student's curve beside the reference's, inline
-                output = (f"<p>{html.escape(output)}</p>"
-                          + "".join(figures.figure_html(f, css=False) for f in test["figures"]))
-                output_format = "html"
-            tests.append({
-                "name": f"{result['exercise']}: {test['name']}",
-                "number": f"{result['exercise'][:2]}.{k}",
-                "score": test["points"] if test["passed"] else 0.0,
-                "max_score": test["points"],
-                "status": "passed" if test["passed"] else "failed",
-                "output": output,
-                "output_format": output_format,
-                "visibility": hidden_visibility if test["hidden"] else "visible",
-                "tags": [result["exercise"]] + (["hidden"] if test["hidden"] else []),
-                "extra_data": {"test": test["test"]},
-            })
-    score, top = score_of([t for r in results for t in r["tests"]])
-    return {
-        "score": score,
-        "max_score": top,
-        "execution_time": round(sum(r.get("seconds", 0.0) for r in results), 2),
-        "output": "\n".join(lines),
-        "output_format": "simple_format",
-        "visibility": "visible",
-        "stdout_visibility": "hidden",
-        "extra_data": {"student": student, "seeds": {r["exercise"]: r.get("seed") for r in results},
-                       "sandbox": {r["exercise"]: r.get("isolation", {}) for r in results}},
-        "tests": tests,
-    }
+gradescope_results = to_gradescope  # the name this module gave it first
 
 
 def _cell(text):
@@ -103,27 +43,25 @@ def _cell(text):
 
 def feedback_markdown(student, results):
     """Per-student feedback in Markdown: scores, a table of tests, reasons, how to reproduce."""
-    score, top = score_of([t for r in results for t in r["tests"]])
+    results = _records(results)
+    score, top = score_of(t for r in results for t in r.tests)
     out = [f"# Feedback for {student}", "", f"**Total: {_fmt(score)} / {_fmt(top)} points**", ""]
-    if any(t.get("figures") for r in results for t in r["tests"]):
+    if any(t.figures for r in results for t in r.tests):
         out += ["Figures of your curves beside the reference's are in `feedback.html`, beside this file.", ""]
     for result in results:
-        s, m = score_of(result["tests"])
-        out += [f"## {result['exercise']}: {_fmt(s)} / {_fmt(m)}", ""]
-        if result.get("notebook"):
-            out += [f"Graded notebook: `{result['notebook']}`", ""]
+        out += [f"## {result.exercise}: {_fmt(result.score)} / {_fmt(result.max_score)}", ""]
+        if result.notebook:
+            out += [f"Graded notebook: `{result.notebook}`", ""]
         out += ["| | test | points | what happened |", "| --- | --- | ---: | --- |"]
-        for test in result["tests"]:
-            mark = "✅" if test["passed"] else "❌"
-            name = test["name"] + (" *(hidden)*" if test["hidden"] else "")
-            got = test["points"] if test["passed"] else 0
-            out.append(f"| {mark} | {_cell(name)} | {_fmt(got)} / {_fmt(test['points'])} | "
-                       f"{_cell('' if test['passed'] else test['reason'])} |")
+        for test in result.tests:
+            mark = "✅" if test.passed else "❌"
+            name = test.name + (" *(hidden)*" if test.hidden else "")
+            out.append(f"| {mark} | {_cell(name)} | {_fmt(test.score)} / {_fmt(test.points)} | "
+                       f"{_cell('' if test.passed else test.reason)} |")
         out.append("")
-        for note in result.get("notes", []):
-            out.append(f"- {note}")
-        if result.get("seed") is not None and any(t["hidden"] for t in result["tests"]):
-            out.append(f"- Hidden tests drew their random parameters with seed {result['seed']}.")
+        out += [f"- {note}" for note in result.notes]
+        if result.seed is not None and any(t.hidden for t in result.tests):
+            out.append(f"- Hidden tests drew their random parameters with seed {result.seed}.")
         out.append("")
     return "\n".join(out).rstrip("\n") + "\n"
 
@@ -158,12 +96,11 @@ code { font-size: .85em; background: #eee; padding: 0 .2rem; border-radius: .2re
 
 
 def _figures_row(test):
-    shown = test.get("figures") or []
-    if not shown:
+    if not test.figures:
         return ""
-    count = f"{len(shown)} figure{'s' if len(shown) > 1 else ''}"
-    inner = "".join(figures.figure_html(f) for f in shown)
-    return (f'<tr class="figures"><td></td><td colspan="3"><details{"" if test["passed"] else " open"}>'
+    count = f"{len(test.figures)} figure{'s' if len(test.figures) > 1 else ''}"
+    inner = "".join(figures.figure_html(f) for f in test.figures)
+    return (f'<tr class="figures"><td></td><td colspan="3"><details{"" if test.passed else " open"}>'
             f"<summary>Your curve beside the reference ({count})</summary>"
             f'<div class="figure-list">{inner}</div></details></td></tr>')
 
@@ -174,8 +111,8 @@ def feedback_html(student, results):
     Parameters
     ----------
     student : str
-    results : list of dict
-        As for :func:`gradescope_results`.
+    results : list of SubmissionRecord
+        One per exercise graded.
 
     Returns
     -------
@@ -185,7 +122,8 @@ def feedback_html(student, results):
         external resources (its Content-Security-Policy forbids them).
     """
     e = html.escape
-    score, top = score_of([t for r in results for t in r["tests"]])
+    results = _records(results)
+    score, top = score_of(t for r in results for t in r.tests)
     out = ['<!DOCTYPE html>', '<html lang="en">', "<head>", '<meta charset="utf-8">',
            '<meta http-equiv="Content-Security-Policy" content="default-src \'none\'; img-src data:; '
            'style-src \'unsafe-inline\'">',
@@ -193,25 +131,24 @@ def feedback_html(student, results):
            f"<title>Feedback for {e(student)}</title>", f"<style>{_CSS}</style>", "</head>", "<body><main>",
            f"<h1>Feedback for {e(student)}</h1>", f'<p class="total">Total: {_fmt(score)} / {_fmt(top)} points</p>']
     for result in results:
-        s, m = score_of(result["tests"])
-        out.append(f'<section class="exercise"><h2>{e(result["exercise"])}: {_fmt(s)} / {_fmt(m)}</h2>')
-        if result.get("notebook"):
-            out.append(f'<p class="meta">Graded notebook: <code>{e(str(result["notebook"]))}</code></p>')
+        out.append(f'<section class="exercise"><h2>{e(result.exercise)}: {_fmt(result.score)} / '
+                   f'{_fmt(result.max_score)}</h2>')
+        if result.notebook:
+            out.append(f'<p class="meta">Graded notebook: <code>{e(str(result.notebook))}</code></p>')
         out.append('<table><colgroup><col class="mark"><col class="test"><col class="points"><col></colgroup>'
                    "<thead><tr><th></th><th>test</th><th>points</th><th>what happened</th></tr></thead><tbody>")
-        for test in result["tests"]:
-            status = "passed" if test["passed"] else "failed"
-            hidden = ' <span class="hidden-tag">hidden</span>' if test["hidden"] else ""
-            got = test["points"] if test["passed"] else 0
-            out.append(f'<tr class="{status}"><td class="mark">{"✓" if test["passed"] else "✗"}</td>'
-                       f"<td>{e(test['name'])}{hidden}</td>"
-                       f'<td class="points">{_fmt(got)} / {_fmt(test["points"])}</td>'
-                       f'<td class="reason">{"" if test["passed"] else e(test["reason"])}</td></tr>')
+        for test in result.tests:
+            status = "passed" if test.passed else "failed"
+            hidden = ' <span class="hidden-tag">hidden</span>' if test.hidden else ""
+            out.append(f'<tr class="{status}"><td class="mark">{"✓" if test.passed else "✗"}</td>'
+                       f"<td>{e(test.name)}{hidden}</td>"
+                       f'<td class="points">{_fmt(test.score)} / {_fmt(test.points)}</td>'
+                       f'<td class="reason">{"" if test.passed else e(test.reason)}</td></tr>')
             out.append(_figures_row(test))
         out.append("</tbody></table>")
-        notes = [e(n) for n in result.get("notes", [])]
-        if result.get("seed") is not None and any(t["hidden"] for t in result["tests"]):
-            notes.append(f"Hidden tests drew their random parameters with seed {e(str(result['seed']))}.")
+        notes = [e(n) for n in result.notes]
+        if result.seed is not None and any(t.hidden for t in result.tests):
+            notes.append(f"Hidden tests drew their random parameters with seed {e(str(result.seed))}.")
         if notes:
             out.append('<ul class="notes">' + "".join(f"<li>{n}</li>" for n in notes) + "</ul>")
         out.append("</section>")
@@ -225,19 +162,20 @@ def write_gradebook(path, rows, exercises):
     Parameters
     ----------
     rows : dict
-        student -> list of per-exercise results (as for :func:`gradescope_results`).
+        student -> list of :class:`~particles.course.records.SubmissionRecord`, one per exercise.
     exercises : list of str
         Column order. An exercise a student did not submit is left empty.
     """
+    rows = {student: _records(results) for student, results in rows.items()}
     maxima = {}
     for results in rows.values():
         for r in results:
-            maxima[r["exercise"]] = max(maxima.get(r["exercise"], 0), score_of(r["tests"])[1])
+            maxima[r.exercise] = max(maxima.get(r.exercise, 0), r.max_score)
     with open(path, "w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(["student", *exercises, "total", "max_total"])
         for student in sorted(rows):
-            by_exercise = {r["exercise"]: score_of(r["tests"])[0] for r in rows[student]}
+            by_exercise = {r.exercise: r.score for r in rows[student]}
             total = sum(by_exercise.values())
             writer.writerow([student, *[_fmt(by_exercise[e]) if e in by_exercise else "" for e in exercises],
                              _fmt(total), _fmt(sum(maxima.get(e, 0) for e in exercises))])

@@ -14,8 +14,6 @@ worker is killed and the next call starts a fresh one.
 
 import copy
 import functools
-import math
-import numbers
 import os
 import shutil
 import signal
@@ -26,48 +24,14 @@ import numpy as np
 
 from . import isolation as walls
 from .code import SubmissionCode, read_submission
+from .limits import DEFAULTS, GRACE, check_limit, limits as all_limits
 from .process import Worker, WorkerDied, WorkerTimeout
 from .protocol import ProtocolError, Unsupported
 from .registry import RemoteFunction
 
 __all__ = ["GradingFailure", "Submission", "DEFAULTS", "describe_value", "check_limit"]
 
-DEFAULTS = {
-    "time_limit": 5.0,       # seconds of wall-clock time per call
-    "load_time_limit": 10.0, # seconds per kept statement when loading the notebook
-    "memory_mb": 1024,       # address space the submission may add to the worker's, MiB
-    "cpu_seconds": 600,      # CPU time of one worker, a backstop if the grader died
-    "file_mb": 16,           # largest file the submission may write in its scratch folder, MiB
-}
-"""Default limits of a worker (all settable per grading run; time limits per test too)."""
-
-_GRACE = 2.0  # seconds after a soft time limit before the worker is killed
-
-_UNITS = {"time_limit": "seconds", "load_time_limit": "seconds", "memory_mb": "MiB", "cpu_seconds": "seconds",
-          "file_mb": "MiB"}
-
-
-def check_limit(name, value):
-    """`value` as a float, after checking that it is a finite number > 0.
-
-    Parameters
-    ----------
-    name : str
-        The limit's name, for the message (``"time_limit"``, ``"memory_mb"``, ...).
-    value : int or float
-        The limit.
-
-    Raises
-    ------
-    ValueError
-        Naming the limit, when `value` is not a real number (a bool is not),
-        is infinite or NaN, or is not > 0: a limit of 0 would switch the
-        limit off, a negative one breaks the timer.
-    """
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value) or value <= 0:
-        unit = _UNITS.get(name)
-        raise ValueError(f"{name} must be a finite number > 0{f' ({unit})' if unit else ''}, got {value!r}")
-    return float(value)
+_GRACE = GRACE  # seconds after a soft time limit before the worker is killed
 
 
 class GradingFailure(AssertionError):
@@ -155,13 +119,7 @@ class Submission:
         self.layers = {}
         self.forbidden = dict(forbidden or {})
         self.deny = [str(p) for p in deny]
-        unknown = sorted(set(limits) - set(DEFAULTS))
-        if unknown:
-            raise TypeError(f"unknown limit {unknown[0]!r}; expected one of {', '.join(DEFAULTS)}")
-        given = {k: v for k, v in limits.items() if v is not None}
-        for key, value in given.items():
-            check_limit(key, value)
-        self.limits = dict(DEFAULTS, **given)
+        self.limits = all_limits(**limits)
         self._own_scratch = scratch is None
         self.scratch = Path(tempfile.mkdtemp(prefix="particles-grade-") if scratch is None else scratch)
         if self.plan.separate_uid:  # workers of their own uid must pass through (not list) the parent

@@ -14,6 +14,7 @@ import tempfile
 from pathlib import Path
 
 from .discovery import notebook_digest
+from .records import SubmissionRecord
 
 __all__ = ["RecordStore"]
 
@@ -40,9 +41,9 @@ class RecordStore:
         return self.folder / f"{student}__{exercise}.json"
 
     def save(self, result):
-        """Write one notebook's result (a dict as :func:`particles.course.grading.grade_batch` returns)."""
-        target = self.path(result["student"], result["exercise"])
-        data = dict(result, options=self.options)
+        """Write one notebook's :class:`~particles.course.records.SubmissionRecord` (atomically: a new file, renamed)."""
+        target = self.path(result.student, result.exercise)
+        data = dict(result.to_dict(), options=self.options)
         handle, name = tempfile.mkstemp(dir=self.folder, prefix=".record-", suffix=".json")
         try:
             with os.fdopen(handle, "w") as stream:
@@ -69,4 +70,9 @@ class RecordStore:
         if not same:
             return None
         data.pop("options", None)
-        return dict(data, notebook=str(unit.notebook), resumed=True)
+        try:
+            record = SubmissionRecord.from_dict(data)
+        except (TypeError, ValueError):
+            return None
+        record.notebook, record.resumed = str(unit.notebook), True
+        return record

@@ -18,6 +18,7 @@ from particles.course.check import check
 from particles.course.figures import MAX_POINTS, Feedback, curve_spec, png
 from particles.course.grading import LibraryChanged, grade
 from particles.course.reports import feedback_html, gradescope_results
+from particles.course.records import SubmissionRecord, TestRecord
 
 from ..browser import find_or_install_chromium
 from .grader.exercise_corpus import build
@@ -166,7 +167,7 @@ def test_check_result_shows_the_convergence_figure_inline():
     shown = result._repr_html_()
     assert not result.passed and "<table>" in shown and "❌" in shown
     assert len(_images(shown)) == sum(len(t.get("figures", [])) for t in result.tests) >= 5
-    assert "Global error of your trapezoid steps on the circle field" in json.dumps(result.tests)
+    assert "Global error of your trapezoid steps on the circle field" in json.dumps([t.to_dict() for t in result.tests])
 
 
 def test_curve_spec_keeps_plain_bounded_json_whatever_the_student_returned():
@@ -191,9 +192,9 @@ def test_curve_spec_keeps_plain_bounded_json_whatever_the_student_returned():
 def test_texts_are_escaped_in_html_outputs():
     """A reason holding markup (a student's exception message) is escaped in feedback.html and Gradescope's HTML."""
     spec = curve_spec("<b>title</b>", "x", "y", [{"label": "yours", "y": [1, 2]}], caption="a <i>caption</i>")
-    test = {"test": "test_x", "name": "x <img>", "points": 1.0, "hidden": False, "passed": False,
-            "reason": "raised ValueError: <script>alert(1)</script>", "seed": None, "figures": [spec]}
-    result = {"exercise": "01_x", "tests": [test], "notes": ["<iframe>"], "seed": 1, "seconds": 1.0}
+    test = TestRecord(test="test_x", name="x <img>", reason="raised ValueError: <script>alert(1)</script>",
+                      figures=[spec])
+    result = SubmissionRecord(student="<eve>", exercise="01_x", tests=[test], notes=["<iframe>"], seed=1)
     page = feedback_html("<eve>", [result])
     output = gradescope_results("<eve>", [result])["tests"][0]["output"]
     for text in (page, output):

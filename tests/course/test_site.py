@@ -13,7 +13,7 @@ from pathlib import Path
 import nbformat
 import pytest
 
-from particles.site import MATHJAX, MATHJAX_SCRIPTS, build_site, lecture_notebooks, notebook_summary
+from particles.course.site import MATHJAX, MATHJAX_SCRIPTS, build_site, lecture_notebooks, notebook_summary
 
 from ..browser import Browser, find_or_install_chromium, load
 
@@ -118,6 +118,7 @@ def check_players(tab, page, count=None):
 
 
 def test_pages_in_lecture_order_with_navigation(small_site):
+    """The index and the pages follow the lectures' numbers, and each page links the next one and the index."""
     root, pages = small_site
     assert [p.name for p in pages] == ["index.html", "01_first.html", "02_second.html"]
     index = (root / "site" / "index.html").read_text()
@@ -147,6 +148,7 @@ def test_pages_load_only_the_sites_own_files(small_site):
 
 
 def test_lecture_list_and_summary(tmp_path):
+    """A missing folder or one without lectures is refused by name; a lecture's title and summary come from its first cell."""
     with pytest.raises(ValueError, match="does not exist"):
         lecture_notebooks(tmp_path / "nowhere")
     assert notebook_summary(notebook("Forces")) == ("Forces", "This lecture shows forces.")

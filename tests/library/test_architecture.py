@@ -200,9 +200,22 @@ def test_one_time_loop():
 
 
 def test_long_modules_are_listed_in_the_readme():
-    """Every library module over 400 lines is named, with the reason, in the README's layout section."""
+    """Every module over 400 lines (library and course tools) is named, with the reason, in the README's layout."""
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     layout = re.search(r"^## Layout\n(.*?)^## ", readme, flags=re.M | re.S).group(1)
-    long = sorted(name for name in LIBRARY if len(MODULES[name].read_text(encoding="utf-8").splitlines()) > 400)
+    long = sorted(name for name in MODULES if len(MODULES[name].read_text(encoding="utf-8").splitlines()) > 400)
     missing = [name for name in long if f"`{MODULES[name].relative_to(ROOT).as_posix()}`" not in layout]
+    assert missing == []
+
+
+def test_every_test_says_what_it_checks():
+    """Every test function of the suite opens with a docstring (one line saying what it checks)."""
+    import ast
+
+    missing = []
+    for path in sorted((ROOT / "tests").rglob("test_*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name.startswith("test"):
+                if not (ast.get_docstring(node) or "").strip():
+                    missing.append(f"{path.relative_to(ROOT)}::{node.name}")
     assert missing == []

@@ -13,6 +13,7 @@ from particles.tour import force_field_scene, lennard_jones_costs
 
 
 def test_tour_writes_files_and_prints_table(tmp_path, capsys):
+    """`particles tour` writes every figure, table and animation, and prints the measured orders."""
     assert main(["tour", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     for name in ("order.png", "order.svg", "order.csv", "force_field.gif", "lennard_jones_costs.csv",
@@ -39,17 +40,20 @@ def test_force_field_scene_stays_bounded():
 
 
 def test_lennard_jones_costs_rows():
+    """The Lennard-Jones cost table has one row per size, with pairs and both searches' times."""
     rows = lennard_jones_costs(sizes=(100, 200))
     assert [r["n"] for r in rows] == [100, 200]
     assert all(r["pairs"] > 0 and r["all_s"] > 0 and r["cells_s"] > 0 for r in rows)
 
 
 def test_console_script_help():
+    """`python -m particles --help` lists the commands."""
     result = subprocess.run([sys.executable, "-m", "particles", "--help"], capture_output=True, text=True)
     assert result.returncode == 0 and "tour" in result.stdout and "demo" in result.stdout
 
 
 def test_unknown_command_fails_cleanly():
+    """An unknown command exits with status 2 and says the choice is invalid."""
     result = subprocess.run([sys.executable, "-m", "particles", "fly"], capture_output=True, text=True)
     assert result.returncode == 2 and "invalid choice" in result.stderr
 

@@ -36,6 +36,7 @@ def test_cloth_drapes_over_sphere_never_inside():
 
 
 def test_cloth_on_floor_settles_flat_at_rest():
+    """A damped cloth dropped on a floor never goes below it and comes to rest flat on it."""
     c = sheet(damping=0.5)
     floor = Plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0])
     step = constrained_step(c, Collider(floor, restitution=0.0, friction=0.3, method="project"))

@@ -16,6 +16,7 @@ def one_spring(free):
 
 
 def test_both_free_move_symmetrically_and_keep_centre_of_mass():
+    """A spring stretched 20% between two free ends is shortened to 10% from both ends, its centre unchanged."""
     r = one_spring([True, True])
     np.testing.assert_allclose(r.x, [[0.45, 0.0], [1.55, 0.0]])
     assert r.x.mean(axis=0) == pytest.approx([1.0, 0.0])
@@ -23,6 +24,7 @@ def test_both_free_move_symmetrically_and_keep_centre_of_mass():
 
 
 def test_one_pinned_only_free_end_moves():
+    """With one end pinned, only the free end moves, by the whole correction."""
     r = one_spring([True, False])
     np.testing.assert_allclose(r.x, [[0.9, 0.0], [2.0, 0.0]])
     r = one_spring([False, True])
@@ -30,12 +32,14 @@ def test_one_pinned_only_free_end_moves():
 
 
 def test_both_pinned_nothing_moves():
+    """A spring between two pins is left as it is."""
     r = one_spring([False, False])
     np.testing.assert_array_equal(r.x, [[0.0, 0.0], [2.0, 0.0]])
     assert r.max_strain == 0.0  # springs between two pins are not constrained
 
 
 def test_compressed_and_slightly_stretched_springs_untouched():
+    """Compressed springs and springs stretched less than the limit are not corrected."""
     x = np.array([[0.0, 0.0], [0.5, 0.0], [1.55, 0.0]])
     r = provot_projection(x, [[0, 1], [1, 2]], [1.0, 1.0], np.ones(3, bool), max_strain=0.1)
     np.testing.assert_array_equal(r.x, x)
@@ -68,6 +72,7 @@ def test_free_pair_centre_of_mass_unchanged_in_cloth():
 
 
 def test_spring_colouring_groups_are_independent_and_complete():
+    """The colour groups hold every spring once and no particle twice within a group."""
     c = cloth(8, 7)
     idx = c.spring_indices()
     groups = color_springs(idx, c.n, seed=3)

@@ -28,6 +28,7 @@ def numerical_gradient(energy, x, eps=1e-6):
 
 
 def test_gravity_is_mass_proportional_and_can_point_up():
+    """Gravity is m g for each particle, and an upward g lifts (smoke)."""
     x = np.zeros((3, 2))
     m = np.array([1.0, 2.0, 0.5])
     np.testing.assert_allclose(Gravity([0, -9.81])(x, m=m), np.outer(m, [0, -9.81]))
@@ -35,11 +36,13 @@ def test_gravity_is_mass_proportional_and_can_point_up():
 
 
 def test_gravity_dimension_mismatch_is_reported():
+    """A 3D g on 2D particles is refused, naming both dimensions."""
     with pytest.raises(ValueError, match="g has 3 components but the particles live in 2 dimensions"):
         Gravity([0, 0, -9.81])(np.zeros((1, 2)))
 
 
 def test_damping_opposes_velocity():
+    """Damping is -d v, and a negative d is refused by name."""
     v = np.array([[1.0, -2.0], [0.0, 3.0]])
     np.testing.assert_allclose(Damping(0.4)(np.zeros((2, 2)), v), -0.4 * v)
     with pytest.raises(ValueError, match="d must be a finite number >= 0"):
@@ -60,6 +63,7 @@ def test_wind_constant_and_gusting():
 
 
 def test_attractor_formula_repulser_and_potential():
+    """The softened attractor's force follows its formula, a negative strength repels, and F = -grad U."""
     x = np.array([[1.0, 0.0], [0.0, -2.0], [3.0, 4.0]])
     a = Attractor([0.0, 0.0], strength=2.0, softening=0.5)
     F = a(x)
@@ -79,6 +83,7 @@ def test_attractor_moving_center():
 
 
 def test_vortex_2d_is_tangential_counterclockwise():
+    """A 2D vortex pushes tangentially, counterclockwise, with the core-softened magnitude."""
     rng = np.random.default_rng(1)
     x = rng.normal(size=(50, 2))
     F = Vortex([0.0, 0.0], strength=1.5, core=0.2)(x)
@@ -102,6 +107,7 @@ def test_vortex_3d_about_axis():
 
 
 def test_field_calls_user_function_and_checks_shape():
+    """A Field calls the user's fn(x, t), and a wrong shape or a non-function is refused by name."""
     fn = Field(lambda x, t: np.sin(t) * x)
     x = np.array([[1.0, 2.0]])
     np.testing.assert_allclose(fn(x, t=0.5), np.sin(0.5) * x)
@@ -235,12 +241,14 @@ def test_lennard_jones_cells_on_cell_boundaries_and_beyond_grid():
 
 
 def test_lennard_jones_momentum_conserved():
+    """The Lennard-Jones forces of a liquid sum to zero."""
     x = random_liquid(500, 3, 0.8, 7)
     F = LennardJones.from_epsilon_sigma()(x)
     assert np.abs(F.sum(axis=0)).max() < 1e-10
 
 
 def test_lennard_jones_force_is_minus_gradient_of_potential():
+    """The Lennard-Jones force is minus the finite-difference gradient of its potential energy."""
     x = random_liquid(40, 2, 0.6, 3)
     lj = LennardJones.from_epsilon_sigma()
     grad = numerical_gradient(lambda y: lj.potential_energy(y), x, eps=1e-7)
@@ -263,6 +271,7 @@ def test_verlet_list_reused_and_still_exact():
 
 
 def test_lennard_jones_bad_parameters():
+    """Bad exponents, neighbour searches and cutoffs are refused by name."""
     with pytest.raises(ValueError, match="exponents must satisfy m > n > 1"):
         LennardJones(1.0, 1.0, 6, 12, 2.5)
     with pytest.raises(ValueError, match="neighbors must be 'cells' or 'all'"):

@@ -289,6 +289,7 @@ def test_integrate_accepts_a_stepper_function():
 
 
 def test_integrate_does_not_modify_initial_state():
+    """integrate never writes into the initial state (a read-only X0 works)."""
     X0 = np.array([[[1.0], [0.0]]])
     X0.setflags(write=False)
     integrate(oscillator_f(np.array([1.0])), X0, 0.0, 1.0, 0.1, method="verlet")
@@ -485,6 +486,21 @@ def test_step_times_names_its_arguments():
     assert step_times(np.float32(1.0), np.array(1.0), 0.1).tolist() == [1.0]
     with pytest.raises(ValueError, match="t0 must be a finite real number"):
         step_times("0", 1.0, 0.1)
+
+
+def test_step_times_never_makes_a_step_of_length_zero():
+    """Far from t = 0, where t0 + k h rounds, every step stays > 0 and at most h (to round-off) and ends on t1."""
+    from particles.integrators import step_times
+
+    rng = np.random.default_rng(3)
+    for _ in range(3000):
+        t0, h, n = rng.uniform(-1e6, 1e6), 10 ** rng.uniform(-5, 0), int(rng.integers(1, 400))
+        t1 = t0 + n * h * (1 + rng.choice([0.0, 1e-15, -1e-15, 1e-10]))
+        t = step_times(t0, t1, h)
+        steps = np.diff(t)
+        assert t[0] == t0 and t[-1] == t1 and steps.min() > 0, (t0, t1, h)
+        assert steps.max() <= h + 4 * np.spacing(abs(t0) + abs(t1)), (t0, t1, h)
+        assert len(steps) in (n, n + 1)
 
 
 def test_convergence_plot_lines_are_distinguishable_and_h_axis_labelled():

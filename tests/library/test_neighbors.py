@@ -73,6 +73,7 @@ def test_grid_sorts_particles_by_cell():
 
 
 def test_tiny_inputs():
+    """No particles or one give no pairs; coincident particles are all pairs."""
     assert [len(a) for a in cell_pairs(np.zeros((0, 2)), 1.0)] == [0, 0]
     assert [len(a) for a in cell_pairs(np.zeros((1, 3)), 1.0)] == [0, 0]
     i, j = cell_pairs(np.zeros((3, 2)), 1.0)  # coincident points interact
@@ -80,6 +81,7 @@ def test_tiny_inputs():
 
 
 def test_bad_arguments():
+    """A bad cutoff, cell count, shape or bounds is refused by name."""
     with pytest.raises(ValueError, match="cutoff must be a positive finite number"):
         cell_pairs(np.zeros((2, 2)), 0.0)
     with pytest.raises(ValueError, match="cells_per_cutoff must be a positive integer"):

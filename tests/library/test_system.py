@@ -107,6 +107,7 @@ def test_divergence_in_run_names_step_and_leaves_system_unchanged():
 
 
 def test_derivative_does_not_modify_state():
+    """derivative and reaction_forces never write into the state (a read-only X works)."""
     ps = ParticleSystem([[0.0, 1.0]], v=[[1.0, 0.0]], forces=[Gravity(g), Damping(1.0)])
     X = ps.state()
     X.setflags(write=False)
@@ -147,12 +148,14 @@ def test_bad_input(kwargs, match):
 
 
 def test_state_of_wrong_shape_is_rejected():
+    """A state of the wrong shape is refused with the expected shape."""
     ps = ParticleSystem([[0.0, 0.0]])
     with pytest.raises(ValueError, match=r"X must have shape \(1, 2, 2\)"):
         ps.derivative(np.zeros((2, 2, 2)), 0.0)
 
 
 def test_unknown_method_in_run():
+    """run refuses an unknown method by name."""
     ps = ParticleSystem([[0.0, 0.0]])
     with pytest.raises(ValueError, match="unknown method 'leapfrog'"):
         ps.run(1.0, 0.1, method="leapfrog")

@@ -36,6 +36,7 @@ def test_readme_api_example_runs(capsys):
 
 
 def test_readme_quick_start_is_the_two_commands():
+    """The README's quick start is `make demo` and `make test`, and CI runs `make test`."""
     text = (ROOT / "README.md").read_text()
     quick = re.search(r"## Quick start(.*?)##", text, re.S).group(1)
     commands = re.findall(r"^make \w+", quick, re.M)

@@ -139,7 +139,7 @@ def execute_notebook(path, timeout=600, kernel_name="python3"):
     nb = nbformat.read(path, as_version=4)
     client = nbclient.NotebookClient(nb, timeout=timeout, kernel_name=kernel_name,
                                      resources={"metadata": {"path": str(path.parent)}})
-    from .explore import STATIC
+    from ..explore import STATIC
 
     client.execute(env={**os.environ, STATIC: "static"})
     return nb
