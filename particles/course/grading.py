@@ -157,7 +157,7 @@ def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None):
 
 
 def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, memory_mb=None, private=(),
-                python=None, log=None, tests=None, timeout=None, isolation=None):
+                python=None, log=None, tests=None, timeout=None, isolation=None, audit_hook=True):
     """Grade notebooks of one exercise in one pytest session; never raises on a bad submission.
 
     Each notebook still gets its own worker; only the pytest process (and the
@@ -176,6 +176,10 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
     isolation : Plan or str, optional
         The workers' walls (default: the strongest available, see
         :func:`particles.course.isolation.plan`).
+    audit_hook : bool
+        False runs the workers without their Python-level walls, leaving only
+        the operating system's: for tests that those hold on their own, never
+        for real grading (default True).
 
     Notes
     -----
@@ -216,6 +220,7 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
                                      for k, (u, seed) in enumerate(zip(units, seeds))]))
         extra = ["--grading-batch", str(batch), "--grading-results", str(results)]
         extra += ["--public-only"] if public_only else []
+        extra += [] if audit_hook else ["--no-audit-hook"]
         extra += ["--time-limit", repr(time_limit)] if time_limit is not None else []
         extra += ["--memory-mb", str(math.ceil(memory_mb))] if memory_mb is not None else []
         for path in private:
@@ -285,7 +290,7 @@ def _batches(units, jobs, largest=20):
 
 def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=None, time_limit=None,
           memory_mb=None, root=None, private=(), hidden_visibility="after_published", python=None,
-          gradescope=None, progress=None, isolation="auto", resume=False):
+          gradescope=None, progress=None, isolation="auto", resume=False, audit_hook=True):
     """Grade submissions; write results.json and feedback per student and a gradebook.
 
     Parameters
@@ -329,6 +334,9 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     resume : bool
         Keep the records already in ``out/records/`` of notebooks that have
         not changed since (same bytes, same options) and grade only the rest.
+    audit_hook : bool
+        False leaves the workers with the operating system's walls only (see
+        :func:`grade_batch`); for tests of those walls, never for grading.
 
     Returns
     -------
@@ -374,7 +382,8 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     # its own code from the grader, so it never needs to read its notebook either
     private = [*map(str, private), *(str(Path(p).resolve()) for p in paths if Path(p).exists())]
     private += [str(out.resolve())] if out is not None else []
-    options = {"public_only": bool(public_only), "seed": seed, "time_limit": time_limit, "memory_mb": memory_mb}
+    options = {"public_only": bool(public_only), "seed": seed, "time_limit": time_limit, "memory_mb": memory_mb,
+               "audit_hook": bool(audit_hook)}
     store = RecordStore(out / "records", options) if out is not None else None
     done = {}
     if resume:
@@ -402,14 +411,15 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         log = out / "logs" / f"batch{k:03d}-{batch[0].exercise}.log" if out is not None else None
         seeds = [seed if seed is not None else secrets.randbelow(2**31) for _ in batch]
         results = grade_batch(batch, root, seeds=seeds, public_only=public_only, time_limit=time_limit,
-                              memory_mb=memory_mb, private=private, python=python, log=log, isolation=plan)
+                              memory_mb=memory_mb, private=private, python=python, log=log, isolation=plan,
+                              audit_hook=audit_hook)
         if len(batch) > 1:  # a session that stopped early: grade its unfinished notebooks alone
             for i, (unit, result) in enumerate(zip(batch, results)):
                 if not result.complete:
                     retry_log = out / "logs" / f"{unit.student}-{unit.exercise}.log" if out is not None else None
                     results[i] = grade_unit(unit, root, seed=seeds[i], public_only=public_only,
                                             time_limit=time_limit, memory_mb=memory_mb, private=private,
-                                            python=python, log=retry_log, isolation=plan)
+                                            python=python, log=retry_log, isolation=plan, audit_hook=audit_hook)
         finished(results)
         return results
 

@@ -107,6 +107,9 @@ def pytest_addoption(parser):
     group.addoption("--memory-mb", type=int, default=None, help="memory a submission may use, MiB")
     group.addoption("--private", action="append", default=[], help="another path a submission may not read")
     group.addoption("--grading-catalog", default=None, help="write the collected tests (name, points, visibility) here")
+    group.addoption("--no-audit-hook", action="store_true", default=False,
+                    help="run the workers without the Python audit hook (to test that the operating system's "
+                         "walls hold on their own; never for real grading)")
     group.addoption("--isolation", default="auto",
                     help="the workers' operating-system walls: auto, strict, or a list such as namespaces,uid,landlock")
 
@@ -214,6 +217,7 @@ def _particles_submission(request, _particles_job):
     submission = Submission(
         code, forbidden=getattr(module, "FORBIDDEN", {}), deny=deny, isolation=config._particles_plan,
         time_limit=config.getoption("--time-limit"), memory_mb=config.getoption("--memory-mb"),
+        audit_hook=not config.getoption("--no-audit-hook"),
     )
     submission.load_failure = problem
     result = config._particles_results[_particles_job["id"]]
