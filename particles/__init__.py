@@ -12,7 +12,10 @@ particle effects with lifetimes (:mod:`particles.emitters`,
 implicit solvers and cloth self-collision (:mod:`particles.massspring`,
 :mod:`particles.constraints`, :mod:`particles.implicit`,
 :mod:`particles.selfcollision`), position-based constraints and rigid rods
-(:mod:`particles.xpbd`, :mod:`particles.pbdconstraints`, :mod:`particles.rigid`), molecular dynamics in a periodic box
+(:mod:`particles.xpbd`, :mod:`particles.pbdconstraints`, :mod:`particles.rigid`),
+cloth as a triangle mesh that never passes through itself (:mod:`particles.mesh`,
+:mod:`particles.intersections`, :mod:`particles.proximity`, :mod:`particles.ccd`,
+:mod:`particles.clothcollisions`, moving bodies in :mod:`particles.moving`), molecular dynamics in a periodic box
 (:mod:`particles.periodic`, :mod:`particles.thermostats`,
 :mod:`particles.liquids`, :mod:`particles.statistics`) and drawing
 (:mod:`particles.render`, imported on demand because it loads Matplotlib's
@@ -24,9 +27,10 @@ pyplot). ``CONTRIBUTING.md`` describes the layout and the data flow of a step.
 >>> t, X = ps.run(0.5, h=0.01, method="verlet")
 """
 
-from . import (collisions, colours, constraints, effects, emitters, flocking, forces, implicit, integrators,
-               liquids, massspring, neighbors, pbdconstraints, periodic, rigid, selfcollision, springs, statistics,
-               steppers, surfaces, thermostats, xpbd)
+from . import (ccd, clothcollisions, collisions, colours, constraints, effects, emitters, flocking, forces, implicit,
+               integrators, intersections, liquids, massspring, mesh, moving, neighbors, pbdconstraints, periodic,
+               proximity, rigid, selfcollision, springs, statistics, steppers, surfaces, thermostats, xpbd)
+from .clothcollisions import ClothCollisions
 from .collisions import Collider
 from .effects import ParticleEffect
 from .errors import ConvergenceError, SimulationDiverged
@@ -76,4 +80,11 @@ __all__ = [
     "xpbd",
     "pbdconstraints",
     "rigid",
+    "mesh",
+    "intersections",
+    "proximity",
+    "ccd",
+    "clothcollisions",
+    "ClothCollisions",
+    "moving",
 ]

@@ -17,6 +17,7 @@ References
 import numpy as np
 
 from ._checks import as_float_array, nonnegative_number, positive_number
+from .backends import check_backend, kernels_for
 from .fields import Force
 from .neighbors import VerletList, all_pairs
 from .pairs import pair_differences
@@ -82,6 +83,11 @@ class LennardJones(Force):
         :mod:`particles.periodic`): each pair interacts through its minimum
         image. Every side must be at least ``2 (cutoff + skin)``. Positions
         may leave the box (they need not be wrapped). Default: open space.
+    backend : {None, "auto", "numpy", "numba"}, optional
+        Who runs the ``"cells"`` force pass: this NumPy code, or a compiled
+        loop over the listed pairs, by blocks of particles (see
+        :mod:`particles.backends`; None: the global choice). ``"all"`` is
+        always the NumPy reference.
 
     Attributes
     ----------
@@ -110,7 +116,9 @@ class LennardJones(Force):
     uses_velocity = False
     uses_time = False
 
-    def __init__(self, k1, k2, m, n, cutoff, neighbors="cells", skin=None, cells_per_cutoff=3, box=None):
+    def __init__(self, k1, k2, m, n, cutoff, neighbors="cells", skin=None, cells_per_cutoff=3, box=None,
+                 backend=None):
+        self._backend = check_backend(backend)
         self.k1 = nonnegative_number(k1, "k1")
         self.k2 = nonnegative_number(k2, "k2")
         self.m_exp = positive_number(m, "m")  # the slide's m and n, stored under names that are not masses
@@ -145,7 +153,7 @@ class LennardJones(Force):
             Range, in metres (default ``2.5 sigma``).
         **options
             Other arguments of :class:`LennardJones` (`neighbors`, `skin`,
-            `cells_per_cutoff`, `box`).
+            `cells_per_cutoff`, `box`, `backend`).
 
         Returns
         -------
@@ -231,6 +239,11 @@ class LennardJones(Force):
             self._add_all_pairs(F, x)
             return
         perm, i, j = self._list.ranked_pairs(x)  # ranks in cell order: neighbours are near in memory
+        fast = kernels_for(self._backend, len(x))
+        if fast is not None:  # the same arithmetic, compiled (particles.backends)
+            box = None if self.box is None else check_box(self.box, x.shape[1])
+            self.last_virial = fast.lennard_jones(self, F, x, perm, i, j, box)
+            return
         n_pairs, d, n = len(i), x.shape[1], len(x)
         xs = np.empty((d, n))  # positions by rank, one row per coordinate
         for a in range(d):  # a loop over the d coordinates

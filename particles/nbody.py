@@ -11,6 +11,7 @@ References
 import numpy as np
 
 from ._checks import nonnegative_number, positive_number
+from .backends import check_backend, kernels_for
 from .fields import Force
 
 __all__ = ["NBodyGravity"]
@@ -29,6 +30,9 @@ class NBodyGravity(Force):
     softening : float
         ``eps``, in metres, >= 0. Plummer softening: removes the singularity
         when two particles pass close; 0 gives the exact inverse-square law.
+    backend : {None, "auto", "numpy", "numba"}, optional
+        This NumPy code or the same double loop compiled, one thread per
+        particle (see :mod:`particles.backends`; None: the global choice).
 
     Notes
     -----
@@ -43,12 +47,17 @@ class NBodyGravity(Force):
     uses_velocity = False
     uses_time = False
 
-    def __init__(self, G=1.0, softening=0.0):
+    def __init__(self, G=1.0, softening=0.0, backend=None):
+        self._backend = check_backend(backend)
         self.G = positive_number(G, "G")
         self.softening = nonnegative_number(softening, "softening", "metres")
 
     def add_to(self, F, x, v, t, m):
         n = len(x)
+        fast = kernels_for(self._backend, n)
+        if fast is not None:  # the same sums, compiled (particles.backends)
+            fast.nbody(self, F, x, np.broadcast_to(m, (n,)))
+            return
         xt = np.ascontiguousarray(x.T)  # (d, n): one row per coordinate
         block = max(1, 1_000_000 // max(n, 1))
         for a in range(0, n, block):  # a loop over blocks of rows

@@ -29,6 +29,7 @@ import scipy.sparse
 
 from ._checks import as_float_array, index_array, per_item
 from ._vectors import unit
+from .backends import check_backend, kernels_for
 from .fields import Force
 from .pairs import pair_differences
 
@@ -58,6 +59,9 @@ class Springs(Force):
         Positions that define the rest lengths when `rest_length` is omitted.
     kind : str, optional
         A label ("structural", "shear", ...), used by builders and plots.
+    backend : {None, "auto", "numpy", "numba"}, optional
+        Who evaluates the forces: this NumPy code, or the same loop compiled
+        (see :mod:`particles.backends`; None: the global choice).
 
     Attributes
     ----------
@@ -73,7 +77,8 @@ class Springs(Force):
            [-5.,  0.]])
     """
 
-    def __init__(self, indices, rest_length=None, k=1.0, kd=0.0, x=None, kind=None):
+    def __init__(self, indices, rest_length=None, k=1.0, kd=0.0, x=None, kind=None, backend=None):
+        self._backend = check_backend(backend)
         ij = index_array(indices, "indices", 2)
         if np.any(ij[:, 0] == ij[:, 1]):
             raise ValueError("indices must join two different particles in every spring")
@@ -114,6 +119,8 @@ class Springs(Force):
 
     def add_to(self, F, x, v, t, m):
         _check_fit(self._highest, len(x), "indices")
+        if (fast := kernels_for(self._backend, len(x))) is not None:  # compiled, one pass (particles.backends)
+            return fast.springs(self, F, x, v)
         d = pair_differences(x, self.i, self.j)             # x_i - x_j, shape (dim, s)
         L = np.sqrt(np.einsum("as,as->s", d, d))
         inv_L = 1.0 / np.maximum(L, 1e-300)                 # d = 0 when L = 0: no force
@@ -252,6 +259,8 @@ class Bending(Force):
         ``theta0`` in radians (default: 0, straight).
     x : array_like, shape (n, d), optional
         Take the rest angles from these positions instead.
+    backend : {None, "auto", "numpy", "numba"}, optional
+        This NumPy code or the same loop compiled (see :mod:`particles.backends`).
 
     Notes
     -----
@@ -261,7 +270,11 @@ class Bending(Force):
     straightens, so the force is computed without dividing by zero.
     """
 
-    def __init__(self, triples, kb=1.0, rest_angle=None, x=None):
+    uses_velocity = False
+    uses_time = False
+
+    def __init__(self, triples, kb=1.0, rest_angle=None, x=None, backend=None):
+        self._backend = check_backend(backend)
         ijl = index_array(triples, "triples", 3)
         self.i, self.j, self.l = (ijl[:, c].copy() for c in range(3))
         b = len(ijl)
@@ -286,6 +299,8 @@ class Bending(Force):
 
     def add_to(self, F, x, v, t, m):
         _check_fit(self._highest, len(x), "triples")
+        if (fast := kernels_for(self._backend, len(x))) is not None:  # the same, compiled (particles.backends)
+            return fast.bending(self, F, x)
         L1, u1, L2, u2, c = self._geometry(x)
         theta = np.arccos(c)
         s = np.sqrt(np.maximum(1.0 - c * c, 0.0))
@@ -343,6 +358,7 @@ class Clamp(Force):
     """
 
     uses_velocity = False
+    uses_time = False
 
     def __init__(self, pairs, direction, kb=1.0):
         ij = index_array(pairs, "pairs", 2)

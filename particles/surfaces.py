@@ -6,7 +6,7 @@ collision is then one evaluation per particle: a particle is inside when
 ``H`` is negative. The gradient ``grad H`` points out of the solid, so the
 unit normal is ``n = grad H / |grad H|``.
 
-The primitives (:class:`Plane`, :class:`Sphere`, :class:`Box`) use the
+The primitives (:class:`Plane`, :class:`Sphere`, :class:`Box`, :class:`Cylinder`) use the
 *signed distance*: ``|H(x)|`` is the distance to the surface and
 ``|grad H| = 1``. They combine like sets:
 
@@ -32,7 +32,7 @@ import numpy as np
 from ._checks import as_float_array, positive_number
 from ._vectors import unit
 
-__all__ = ["Surface", "Plane", "Sphere", "Box", "Union", "Intersection", "Complement"]
+__all__ = ["Surface", "Plane", "Sphere", "Box", "Cylinder", "Union", "Intersection", "Complement"]
 
 # A point p counts as on a combined surface when |H(p)| <= _ON_SURFACE * (1 + |p|).
 _ON_SURFACE = 1e-9
@@ -336,6 +336,87 @@ class Box(Surface):
 
     def __repr__(self):
         return f"Box(lo={self.lo.tolist()}, hi={self.hi.tolist()}, container={self.container})"
+
+
+class Cylinder(Surface):
+    """An infinite circular cylinder in 3D (a bar, a rod, a roller), solid or hollow.
+
+    With ``a`` the unit axis direction and ``p`` a point of the axis, the
+    offset from the axis is ``r = (x - p) - ((x - p) . a) a`` and
+    ``H(x) = |r| - R`` (solid) or ``R - |r|`` (``container=True``). It has no
+    caps: the bar is longer than anything that meets it. The gradient is
+    ``r / |r|``, perpendicular to the axis; on the axis itself it is a fixed
+    unit vector perpendicular to ``a``.
+
+    Parameters
+    ----------
+    point : array_like, shape (3,)
+        A point ``p`` of the axis, in metres.
+    axis : array_like, shape (3,)
+        Direction of the axis (need not be unit, non-zero).
+    radius : float
+        ``R``, in metres, > 0.
+    container : bool
+        Whether the particles live inside the cylinder (a pipe).
+
+    Examples
+    --------
+    >>> bar = Cylinder([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], 0.5)
+    >>> bar.H([[7.0, 0.0, 2.0], [-3.0, 0.3, 0.0]]).tolist()
+    [1.5, -0.2]
+    >>> bar.closest_point([7.0, 0.0, 2.0]).tolist()
+    [7.0, 0.0, 0.5]
+    """
+
+    d = 3
+
+    def __init__(self, point, axis, radius, container=False):
+        self.point = as_float_array(point, "point", shape=(3,))
+        axis = as_float_array(axis, "axis", shape=(3,))
+        if not np.any(axis):
+            raise ValueError("axis must be a non-zero vector")
+        self.axis = axis / np.linalg.norm(axis)
+        self.radius = positive_number(radius, "radius", "metres")
+        self.container = bool(container)
+        self.sign = -1.0 if self.container else 1.0
+        helper = np.eye(3)[np.argmin(np.abs(self.axis))]  # the coordinate axis least parallel to a
+        self._across = np.cross(self.axis, helper) / np.linalg.norm(np.cross(self.axis, helper))
+
+    def _offsets(self, x):
+        """Offsets ``r`` from the axis, shape (n, 3), and their lengths."""
+        y = x - self.point
+        r = y - np.outer(y @ self.axis, self.axis)
+        return r, np.sqrt(np.einsum("ij,ij->i", r, r))
+
+    def _directions(self, x):
+        """Unit offsets from the axis; points on the axis get a fixed perpendicular.
+
+        A point on the axis can have an offset of rounding size along the
+        axis itself; the axial part is removed again after normalizing, and
+        what is left is trusted only if it is more than half a unit vector.
+        """
+        r, dist = self._offsets(x)
+        u = r / np.maximum(dist, 1e-300)[:, None]
+        u -= np.outer(u @ self.axis, self.axis)
+        size = np.sqrt(np.einsum("ij,ij->i", u, u))
+        on_axis = size < 0.5
+        u[on_axis], size[on_axis] = self._across, 1.0
+        return u / size[:, None]
+
+    def _H(self, x):
+        return self.sign * (self._offsets(x)[1] - self.radius)
+
+    def _gradient(self, x):
+        return self.sign * self._directions(x)
+
+    def _closest(self, x):
+        y = x - self.point
+        foot = self.point + np.outer(y @ self.axis, self.axis)  # the nearest point of the axis
+        return foot + self.radius * self._directions(x)
+
+    def __repr__(self):
+        return (f"Cylinder(point={self.point.tolist()}, axis={self.axis.tolist()}, radius={self.radius}, "
+                f"container={self.container})")
 
 
 class _Combination(Surface):

@@ -84,6 +84,7 @@ References
 import numpy as np
 
 from ._checks import as_float_array, count, pinned_indices, positive_number
+from .backends import check_backend, kernels_for
 from .pbdconstraints import Attachment, Distance, IsometricBending, IsometricClamp, _ConstraintSet, color_constraints
 
 __all__ = ["XPBD", "PBD", "Distance", "IsometricBending", "IsometricClamp", "Attachment", "color_constraints",
@@ -153,7 +154,7 @@ def constraints_from_system(system, kinds=None, bending=True):
     return constraints, converted
 
 
-def distance_pass(x, w, indices, rest_length, alpha_tilde, lam, groups=None):
+def distance_pass(x, w, indices, rest_length, alpha_tilde, lam, groups=None, backend=None):
     """One XPBD pass over distance constraints: Gauss-Seidel over colour groups, or Jacobi.
 
     For each constraint ``C = |x_i - x_j| - L0`` with ``u = (x_i - x_j) / |x_i - x_j|``::
@@ -178,6 +179,9 @@ def distance_pass(x, w, indices, rest_length, alpha_tilde, lam, groups=None):
         Colour groups, or a colour per constraint (swept in increasing
         order): a Gauss-Seidel pass. Omitted: one Jacobi pass with averaging
         (module notes).
+    backend : {None, "auto", "numpy", "numba"}, optional
+        This NumPy code or the same projections compiled (see
+        :mod:`particles.backends`; None: the global choice).
 
     Returns
     -------
@@ -201,7 +205,11 @@ def distance_pass(x, w, indices, rest_length, alpha_tilde, lam, groups=None):
         raise ValueError(f"indices refer to particle {c.highest} but x has only {len(x)} particles")
     lam = np.array(as_float_array(lam, "lam", shape=(len(c),)))
     xt = np.ascontiguousarray(x.T)
+    fast = kernels_for(check_backend(backend), len(x))
     for b in c.batches(w, "jacobi" if groups is None else "gauss-seidel"):  # a loop over colours
+        if fast is not None:  # the same projections, compiled (particles.backends)
+            fast.distance_project(c, b, xt, xt, lam, 1.0, "xpbd")
+            continue
         c.project(b, xt, xt, lam, 1.0, "xpbd")
     return np.ascontiguousarray(xt.T), lam
 
@@ -237,6 +245,11 @@ class XPBD:
         response, :meth:`particles.collisions.Collider.resolve`), as Macklin et
         al. (2019) treat contacts; or wrap the whole stepper with
         :meth:`~particles.collisions.Collider.stepper`.
+    backend : {None, "auto", "numpy", "numba"}, optional
+        Who projects the distance constraints: the NumPy code of
+        :meth:`Distance.project`, or the same projections compiled, one
+        colour group at a time (see :mod:`particles.backends`; None: the
+        global choice). Other constraint sets always use NumPy.
 
     Attributes
     ----------
@@ -275,7 +288,8 @@ class XPBD:
     second_order_layout = True
 
     def __init__(self, constraints, m, pinned=(), *, substeps=1, iterations=1, method="gauss-seidel",
-                 forces=None, collider=None):
+                 forces=None, collider=None, backend=None):
+        self._backend = check_backend(backend)
         if isinstance(constraints, _ConstraintSet):
             constraints = [constraints]
         constraints = list(constraints)
@@ -339,7 +353,7 @@ class XPBD:
         bending : bool
             Convert Bending forces too.
         **options
-            ``substeps``, ``iterations``, ``method``, ``collider``.
+            ``substeps``, ``iterations``, ``method``, ``collider``, ``backend``.
 
         Returns
         -------
@@ -395,9 +409,13 @@ class XPBD:
     def _solve(self, x, x_n, hs):
         """The constraint iterations of one substep, on x (d, n) in place; returns the multipliers."""
         lams = [s.new_multipliers(len(x)) for s in self._sets]
+        fast = [kernels_for(self._backend, self.n) if isinstance(s, Distance) else None for s in self._sets]
         for _ in range(self.iterations):  # a loop over iterations
-            for s, batches, lam in zip(self._sets, self._batches, lams):  # a loop over the few sets
+            for s, batches, lam, kernels in zip(self._sets, self._batches, lams, fast):  # a loop over the few sets
                 for b in batches:  # Gauss-Seidel: one colour at a time (Jacobi: one batch)
+                    if kernels is not None:  # the same projections, compiled (particles.backends)
+                        kernels.distance_project(s, b, x, x_n, lam, hs, self.formulation)
+                        continue
                     s.project(b, x, x_n, lam, hs, self.formulation)
         return lams
 

@@ -107,6 +107,7 @@ class Worker:
             "MPLCONFIGDIR": str(self.scratch / ".matplotlib"), "MPLBACKEND": "Agg", "LANG": "C.UTF-8",
             "PYTHONDONTWRITEBYTECODE": "1", "PYTHONPATH": library_parent(), "PYTHONNOUSERSITE": "1",
             "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+            "NUMBA_DISABLE_JIT": "1",  # the NumPy reference (particles.backends): no compiler, no cache
         }
         if self.lease is not None:
             env[UID_VARIABLE] = str(self.lease.uid)

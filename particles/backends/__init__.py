@@ -1,0 +1,213 @@
+"""Backends: the NumPy reference, or the same loops compiled with numba (``pip install particles[fast]``).
+
+The library's force passes are written in NumPy, the code students read: a
+spring force is about ten whole-array operations (gather ``x_i`` and ``x_j``,
+subtract, square, sum, square root, divide, ... scatter), each one pass over
+arrays of all the springs. A compiled loop does the same arithmetic in one
+pass, spring by spring, with every value still in a register. Where memory
+traffic and not arithmetic sets the time (cloth springs, Lennard-Jones
+pairs), that is worth a factor of several (``bench/bench_backends.py``).
+
+**The switch.** Every object that has a compiled kernel takes a ``backend``
+argument (:class:`~particles.springs.Springs`,
+:class:`~particles.springs.Bending`,
+:class:`~particles.lennardjones.LennardJones`,
+:class:`~particles.nbody.NBodyGravity`, :class:`~particles.xpbd.XPBD` and
+:func:`~particles.xpbd.distance_pass`):
+
+* ``"numpy"``: the reference code, always;
+* ``"numba"``: the compiled kernels (an error, naming the extra to install,
+  when numba is missing);
+* ``"auto"``: numba when it is installed and the system has at least
+  :data:`AUTO_MIN` particles (a 64^2 cloth, a 4k liquid), NumPy otherwise:
+  small problems (the lectures' examples, the tests) stay bit for bit those
+  of the reference and never wait for a compiler;
+* ``None`` (the default of every object): the global choice, set by
+  :func:`set_backend` or, for a block, :func:`using`; it starts as the
+  environment variable ``PARTICLES_BACKEND`` (``numpy``, ``numba`` or
+  ``auto``), or ``"auto"`` when that is unset.
+
+``PARTICLES_BACKEND=numpy`` also turns ``"auto"`` into NumPy everywhere, and
+so does numba's own ``NUMBA_DISABLE_JIT=1``: the grader's workers run with the
+latter (:mod:`particles.course.process`), so they never import numba or need
+its cache. Should numba fail to load, ``"auto"`` falls back to NumPy (once,
+with a warning). The choice is made at each force evaluation, so
+:func:`using` applies to objects built before it too.
+
+**Agreement.** A kernel does the operations of the NumPy code in the same
+order wherever that costs nothing (springs, bending and XPBD give the same
+bits as NumPy), and sums per particle in a fixed order what NumPy scatters
+with ``np.bincount``, so the two agree to about 1e-15 relative (tested to
+1e-12 on every problem of the force contract and on larger ones,
+``tests/library/test_backends.py``).
+
+**Determinism and threads.** Loops of 16k items or more run on numba's
+threads (``NUMBA_NUM_THREADS``, or :func:`numba.set_num_threads`); shorter
+ones on one. The result has the same bits for any number of threads: each
+output (a particle's force, a constraint's correction) is written by one
+thread, as a sum in a fixed order, through a per-particle incidence list in
+compressed-row form (for Lennard-Jones, per block of particles, a number
+that depends on the system only) rather than with atomic additions; totals
+(the virial) are summed after the parallel loop. Springs have two forms with
+the same bits: a one-pass scatter on one thread, and forces per spring in
+parallel then a per-particle gather, which moves more memory and is used
+from four threads on. Unless ``NUMBA_THREADING_LAYER`` says otherwise, the
+threads are numba's own work queue, not OpenMP's, whose idle threads spin:
+on a machine shared with other processes that made the many short parallel
+loops of an XPBD step several times slower on two threads than on one.
+
+**Why numba.** It compiles plain Python loops over NumPy arrays, so the
+kernel reads as the slide's loop, with the same names; it ships as wheels
+for the platforms the course supports, needs no compiler on the student's
+machine, caches its machine code on disk, and runs on the CPU that every
+student has. Warp and Taichi are GPU-first, with their own array types and
+runtimes to initialize; Cython and C extensions need a build step; JAX
+traces array code (the NumPy formulation again, not a loop) and is a large
+dependency. ``bench/bench_backends.py`` times Warp's and Taichi's CPU
+backends beside numba when they are installed (extra ``[bench]``).
+
+**Compile cache.** Kernels are compiled on first use (seconds) and cached on
+disk (``cache=True``) in ``NUMBA_CACHE_DIR`` if it is set, else in
+``~/.cache/particles/numba`` (or ``$XDG_CACHE_HOME/particles/numba``, or a
+folder of the temporary directory): never inside the package, which may be
+read-only and whose files the grader checksums. With no writable place,
+kernels are compiled in memory, once per process. ``bench/bench_backends.py``
+reports the compile time and the cached load time apart from the run times.
+
+Examples
+--------
+>>> from particles import backends
+>>> "numpy" in backends.available()
+True
+>>> with backends.using("numpy"):
+...     backends.resolve(None, 10**6)
+'numpy'
+"""
+
+import contextlib
+import importlib.util
+import os
+import warnings
+
+__all__ = ["BACKENDS", "AUTO_MIN", "available", "check_backend", "resolve", "set_backend", "get_backend",
+           "using", "kernels_for"]
+
+BACKENDS = ("auto", "numpy", "numba")
+
+# "auto" compiles for systems of this many particles or more: below, a NumPy force pass costs about a
+# millisecond or less, and loading the compiled code (a fraction of a second) would cost more than it saves
+AUTO_MIN = 4096
+
+ENVIRONMENT = "PARTICLES_BACKEND"
+
+_state = {"default": None, "numba": None}
+
+
+def _numba_installed():
+    if _state["numba"] is None:
+        _state["numba"] = importlib.util.find_spec("numba") is not None
+    return _state["numba"]
+
+
+def available():
+    """The backends that can run here: ``("numpy",)``, or ``("numpy", "numba")`` with the extra installed.
+
+    Returns
+    -------
+    tuple of str
+    """
+    return ("numpy", "numba") if _numba_installed() else ("numpy",)
+
+
+def check_backend(backend, name="backend"):
+    """`backend` checked: None, ``"auto"``, ``"numpy"`` or ``"numba"`` (numba only when installed).
+
+    Raises
+    ------
+    ValueError
+        For another value, or ``"numba"`` without numba (the message names the extra to install).
+    """
+    if backend is not None and backend not in BACKENDS:
+        raise ValueError(f"{name} must be 'numpy', 'numba', 'auto' or None, got {backend!r}")
+    if backend == "numba" and not _numba_installed():
+        raise ValueError(f"{name}='numba' needs numba, which is not installed: pip install 'particles[fast]' "
+                         "(or use backend='numpy' or 'auto')")
+    return backend
+
+
+def _environment():
+    value = os.environ.get(ENVIRONMENT, "").strip().lower()
+    if value and value not in BACKENDS:
+        raise ValueError(f"the environment variable {ENVIRONMENT} must be 'numpy', 'numba' or 'auto', "
+                         f"got {value!r}")
+    return value or None
+
+
+def get_backend():
+    """The global choice: from :func:`set_backend` or :func:`using`, else ``$PARTICLES_BACKEND``, else "auto"."""
+    return _state["default"] or _environment() or "auto"
+
+
+def set_backend(backend):
+    """Set the global choice (``"auto"``, ``"numpy"`` or ``"numba"``; None: back to the environment's).
+
+    Objects built with ``backend=None`` (the default) follow it at their next
+    evaluation.
+    """
+    _state["default"] = check_backend(backend)
+
+
+@contextlib.contextmanager
+def using(backend):
+    """Within the block, the global choice is `backend` (e.g. ``with using("numba"): ...``)."""
+    before = _state["default"]
+    set_backend(backend)
+    try:
+        yield backend
+    finally:
+        _state["default"] = before
+
+
+def resolve(backend, size):
+    """Which backend runs a pass over `size` particles, for an object's `backend` option: "numpy" or "numba".
+
+    Parameters
+    ----------
+    backend : {None, "auto", "numpy", "numba"}
+        The object's option (None: :func:`get_backend`).
+    size : int
+        Particles of the system (``"auto"`` compiles from :data:`AUTO_MIN`).
+
+    Returns
+    -------
+    str
+    """
+    choice = get_backend() if backend is None else backend
+    if choice == "auto":
+        if size < AUTO_MIN or _environment() == "numpy" or os.environ.get("NUMBA_DISABLE_JIT", "0") != "0" \
+                or not _numba_installed() or _state.get("broken"):
+            return "numpy"
+        return "numba"
+    if choice == "numba" and not _numba_installed():
+        check_backend("numba")
+    return choice
+
+
+def kernels_for(backend, size):
+    """The compiled kernels (:mod:`particles.backends.compiled`) if `backend` resolves to numba, else None.
+
+    The force modules call it at each evaluation; numba is imported only here,
+    at the first pass that uses it, never by ``import particles``.
+    """
+    if resolve(backend, size) != "numba":
+        return None
+    try:
+        from . import compiled  # noqa: PLC0415  (imports numba)
+    except Exception as error:  # numba installed but unusable (a broken install, a sandbox)
+        if (get_backend() if backend is None else backend) != "auto":
+            raise
+        _state["broken"] = True
+        warnings.warn(f"backend 'auto': numba could not be loaded ({error}); using NumPy", RuntimeWarning,
+                      stacklevel=3)
+        return None
+    return compiled

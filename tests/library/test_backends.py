@@ -1,0 +1,271 @@
+"""The backends: the compiled kernels agree with the NumPy reference, and the switch does what it says.
+
+The whole force contract (``tests/library/test_force_contract.py``) runs
+again with the numba backend forced for every object, and every force of it
+is compared between the two backends to 1e-12 relative; larger problems
+(a cloth, a Lennard-Jones liquid, XPBD sweeps, N-body) are compared too, and
+repeated with one and two threads for determinism. Tests that need numba are
+skipped when the extra ``[fast]`` is not installed.
+"""
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from particles import backends
+from particles.forces import LennardJones, NBodyGravity
+from particles.liquids import fcc_lattice
+from particles.massspring import cloth, hair
+from particles.springs import Bending, Springs
+from particles.xpbd import PBD, XPBD, distance_pass
+
+from . import test_force_contract as contract
+
+needs_numba = pytest.mark.skipif("numba" not in backends.available(),
+                                 reason="numba is not installed (pip install 'particles[fast]')")
+
+BACKEND_NAMES = [pytest.param("numpy"), pytest.param("numba", marks=needs_numba)]
+
+
+def _close(a, b, rtol=1e-12):
+    """Arrays equal to `rtol` relative to their largest entry."""
+    a, b = np.asarray(a), np.asarray(b)
+    assert a.shape == b.shape
+    assert np.abs(a - b).max(initial=0.0) <= rtol * max(np.abs(a).max(initial=0.0), 1e-300)
+
+
+# the force contract, run again with every object on the backend
+CONTRACT = [contract.test_inputs_are_not_modified, contract.test_add_to_adds_in_place_with_the_right_shape_and_dtype,
+            contract.test_forces_between_particles_conserve_momentum,
+            contract.test_force_is_minus_the_gradient_of_its_potential_energy,
+            contract.test_declared_independence_of_velocity_and_time_holds]
+
+
+def _contract_params():
+    out = []
+    for check in CONTRACT:  # each check of the contract, on the cases it applies to
+        chosen = [m for m in check.pytestmark if m.name == "parametrize"][0].args[1]
+        out += [pytest.param(check, *p.values, id=f"{check.__name__[5:]}-{p.id}") for p in chosen]
+    return out
+
+
+@pytest.mark.parametrize("backend", BACKEND_NAMES)
+@pytest.mark.parametrize("check, case, d", _contract_params())
+def test_the_force_contract_holds_on_each_backend(check, case, d, backend):
+    """Every check of the force contract passes with every object on this backend."""
+    with backends.using(backend):
+        check(case, d)
+
+
+@needs_numba
+@pytest.mark.parametrize("case, d", contract._params())
+def test_numba_forces_agree_with_numpy_on_every_contract_case(case, d):
+    """Each contract force on numba equals its NumPy value to 1e-12 relative (with velocities and masses)."""
+    x, v, m, t = contract._state(d)
+    out = {}
+    for backend in ("numpy", "numba"):
+        with backends.using(backend):
+            force = case.make(x)
+            out[backend] = force(x, v, t, m), getattr(force, "last_virial", 0.0)
+    _close(out["numpy"][0], out["numba"][0])
+    assert out["numba"][1] == pytest.approx(out["numpy"][1], rel=1e-12, abs=1e-300)
+
+
+def _cloth_state(n, seed=0):
+    c = cloth(n, n, kd=0.05)
+    X = c.state()
+    rng = np.random.default_rng(seed)
+    X[:, 0] += rng.normal(scale=0.05 / n, size=X[:, 0].shape)
+    X[:, 1] = rng.normal(scale=0.1, size=X[:, 1].shape)
+    return c, X
+
+
+@needs_numba
+def test_a_cloth_step_agrees_and_is_the_same_every_time():
+    """A 40^2 cloth (4.6k damped springs): the derivative agrees to 1e-12, repeated calls give the same bits."""
+    c, X = _cloth_state(40)
+    with backends.using("numpy"):
+        reference = c.derivative(X, 0.0)
+    with backends.using("numba"):
+        first = c.derivative(X, 0.0)
+        np.testing.assert_array_equal(c.derivative(X, 0.0), first)
+    _close(reference, first)
+
+
+def _liquid(cells=(6, 6, 6), seed=1):
+    x, box = fcc_lattice(cells, 0.86)
+    return x + np.random.default_rng(seed).uniform(-0.1, 0.1, x.shape), box
+
+
+@needs_numba
+@pytest.mark.parametrize("periodic", [True, False], ids=["periodic", "open"])
+def test_lennard_jones_on_a_liquid_agrees_with_numpy(periodic):
+    """864 particles at rho* = 0.86 (about 34k listed pairs): forces to 1e-12, the virial to 1e-12."""
+    x, box = _liquid()
+    out = {}
+    for backend in ("numpy", "numba"):
+        lj = LennardJones.from_epsilon_sigma(skin=0.3, box=box if periodic else None, backend=backend)
+        out[backend] = lj(x), lj.last_virial
+    _close(out["numpy"][0], out["numba"][0])
+    assert out["numba"][1] == pytest.approx(out["numpy"][1], rel=1e-12)
+
+
+@needs_numba
+def test_lennard_jones_follows_its_list_when_particles_move():
+    """Across list rebuilds (particles moving, unwrapped positions leaving the box) both backends agree."""
+    x, box = _liquid(seed=3)
+    lj = {b: LennardJones.from_epsilon_sigma(skin=0.2, box=box, backend=b) for b in ("numpy", "numba")}
+    rng = np.random.default_rng(4)
+    for _ in range(4):  # a loop over moves: some reuse the list, some rebuild it
+        x = x + rng.normal(scale=0.06, size=x.shape) + np.array([0.5, 0.0, 0.0]) * box
+        _close(lj["numpy"](x), lj["numba"](x))
+    assert lj["numba"].neighbor_list.builds == lj["numpy"].neighbor_list.builds > 1
+
+
+@needs_numba
+@pytest.mark.parametrize("d", [2, 3])
+def test_nbody_and_bending_agree_with_numpy(d):
+    """N-body gravity (300 particles) and a long chain's bending agree to 1e-12."""
+    rng = np.random.default_rng(5)
+    x, m = rng.normal(size=(300, d)), rng.uniform(0.5, 2.0, 300)
+    triples = np.stack([np.arange(298), np.arange(1, 299), np.arange(2, 300)], axis=1)
+    kb = rng.uniform(0.5, 1.0, 298)
+    for make in (lambda b: NBodyGravity(G=2.0, softening=0.05, backend=b),
+                 lambda b: Bending(triples, kb=kb, rest_angle=0.2, backend=b)):
+        _close(make("numpy")(x, m=m), make("numba")(x, m=m))
+
+
+@needs_numba
+@pytest.mark.parametrize("solver", [XPBD, PBD])
+@pytest.mark.parametrize("method", ["gauss-seidel", "jacobi"])
+@pytest.mark.parametrize("kd", [0.0, 0.3], ids=["undamped", "damped"])
+def test_xpbd_and_pbd_runs_agree_with_numpy(solver, method, kd):
+    """Half a second of a 12^2 cloth and of a hair (bending, clamp), 4 substeps x 2 iterations: same positions."""
+    for build in (lambda: cloth(12, 12, kd=kd), lambda: hair(10, kd=kd)):
+        out = []
+        for backend in ("numpy", "numba"):
+            c = build()
+            step = solver.from_system(c, substeps=4, iterations=2, method=method, backend=backend)
+            out.append(c.run(0.5, 1 / 60, method=step)[1][-1])
+        _close(out[0], out[1])
+
+
+@needs_numba
+def test_distance_pass_agrees_with_numpy_with_given_groups():
+    """distance_pass with colour groups given as lists of rows, and as one Jacobi pass, on both backends."""
+    rng = np.random.default_rng(6)
+    x = rng.normal(size=(6, 3))
+    ij = [[0, 1], [2, 3], [1, 2], [3, 4], [4, 5]]
+    w = np.array([0.0, 1.0, 0.5, 2.0, 1.0, 1.0])
+    for groups in ([[0, 1, 4], [2, 3]], None):
+        out = [distance_pass(x, w, ij, 1.0, 0.01, np.zeros(5), groups=groups, backend=b) for b in ("numpy", "numba")]
+        _close(out[0][0], out[1][0])
+        _close(out[0][1], out[1][1])
+
+
+@needs_numba
+def test_results_do_not_depend_on_the_number_of_threads(monkeypatch):
+    """Springs, bending, Lennard-Jones, N-body and XPBD: the same bits on one thread, on two, and serial.
+
+    (For springs the serial form is a one-pass scatter, the parallel one forces per spring then a gather.)
+    """
+    import numba
+
+    from particles.backends import _kernels, compiled
+
+    c, X = _cloth_state(32)
+    x, box = _liquid()
+    rng = np.random.default_rng(7)
+    xn, m = rng.normal(size=(200, 3)), rng.uniform(0.5, 2.0, 200)
+    chain = np.stack([np.arange(198), np.arange(1, 199), np.arange(2, 200)], axis=1)
+    results = []
+    before = numba.get_num_threads()
+    try:
+        for threads, parallel_min in ((1, 0), (min(2, numba.config.NUMBA_NUM_THREADS), 0), (1, 10**9)):
+            monkeypatch.setattr(_kernels, "PARALLEL_MIN", parallel_min)  # 0: every loop parallel; 10**9: none
+            monkeypatch.setattr(compiled, "SPRING_THREADS", 1)  # springs too: the two-pass form, then one pass
+            numba.set_num_threads(threads)
+            with backends.using("numba"):
+                lj = LennardJones.from_epsilon_sigma(skin=0.3, box=box)
+                xpbd = XPBD.from_system(_cloth_state(32)[0], substeps=2)
+                results.append([c.derivative(X, 0.0), lj(x), np.array(lj.last_virial), xpbd(None, X, 0.0, 0.01),
+                                NBodyGravity()(xn, m=m), Bending(chain, kb=0.5)(xn)])
+    finally:
+        numba.set_num_threads(before)
+    for runs in zip(*results):  # a loop over the quantities: each the same in the three runs
+        for other in runs[1:]:
+            np.testing.assert_array_equal(other, runs[0])
+
+
+def test_import_particles_does_not_import_numba():
+    """numba is loaded only by a force pass that uses it, never by ``import particles`` or the NumPy backend."""
+    code = ("import sys, numpy as np, particles; from particles.springs import Springs; "
+            "Springs([[0, 1]], 1.0, k=2.0)(np.array([[0.0, 0.0], [2.0, 0.0]])); print('numba' in sys.modules)")
+    env = dict(os.environ, PARTICLES_BACKEND="numpy")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    assert done.stdout.strip() == "False"
+
+
+def test_auto_is_numpy_for_small_problems_and_under_particles_backend_numpy(monkeypatch):
+    """"auto" compiles only from AUTO_MIN particles, never with PARTICLES_BACKEND=numpy or NUMBA_DISABLE_JIT=1."""
+    monkeypatch.delenv("PARTICLES_BACKEND", raising=False)
+    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
+    assert backends.resolve("auto", backends.AUTO_MIN - 1) == "numpy"
+    assert backends.resolve("numpy", 10**9) == "numpy"
+    expected = "numba" if "numba" in backends.available() else "numpy"
+    assert backends.resolve("auto", backends.AUTO_MIN) == expected
+    monkeypatch.setenv("NUMBA_DISABLE_JIT", "1")  # as in the grader's workers
+    assert backends.resolve(None, 10**9) == backends.resolve("auto", 10**9) == "numpy"
+    monkeypatch.delenv("NUMBA_DISABLE_JIT")
+    monkeypatch.setenv("PARTICLES_BACKEND", "numpy")
+    assert backends.get_backend() == "numpy"
+    assert backends.resolve(None, 10**9) == backends.resolve("auto", 10**9) == "numpy"
+
+
+def test_the_grader_workers_never_compile():
+    """The worker's environment turns 'auto' into NumPy (no numba, no cache in the sandbox)."""
+    import inspect
+
+    from particles.course import process
+
+    assert '"NUMBA_DISABLE_JIT": "1"' in inspect.getsource(process.Worker)
+
+
+@needs_numba
+def test_auto_falls_back_to_numpy_when_numba_cannot_load(monkeypatch):
+    """With numba unusable, 'auto' warns and uses NumPy from then on; an explicit 'numba' raises."""
+    monkeypatch.delattr(backends, "compiled", raising=False)
+    monkeypatch.setitem(sys.modules, "particles.backends.compiled", None)  # importing it now fails
+    monkeypatch.setitem(backends._state, "broken", False)
+    with pytest.warns(RuntimeWarning, match="numba could not be loaded"):
+        assert backends.kernels_for("auto", 10**6) is None
+    assert backends.resolve("auto", 10**6) == "numpy"
+    with pytest.raises(ImportError):
+        backends.kernels_for("numba", 10)
+
+
+def test_the_global_switch_applies_to_objects_built_before_it():
+    """``using`` sets the choice of objects with backend=None for the block, and restores it after."""
+    before = backends.get_backend()
+    with backends.using("numpy"):
+        assert backends.resolve(None, 10**9) == "numpy"
+        assert backends.resolve("auto", 10) == "numpy"
+    assert backends.get_backend() == before
+
+
+def test_bad_backends_are_refused_with_a_clear_message(monkeypatch):
+    """An unknown name names the argument; 'numba' without numba names the extra to install."""
+    with pytest.raises(ValueError, match="backend must be 'numpy', 'numba', 'auto' or None, got 'cuda'"):
+        Springs([[0, 1]], 1.0, backend="cuda")
+    with pytest.raises(ValueError, match="PARTICLES_BACKEND"):
+        monkeypatch.setenv("PARTICLES_BACKEND", "fast")
+        backends.get_backend()
+    monkeypatch.delenv("PARTICLES_BACKEND")
+    monkeypatch.setitem(backends._state, "numba", False)
+    assert backends.available() == ("numpy",)
+    with pytest.raises(ValueError, match=r"pip install 'particles\[fast\]'"):
+        LennardJones.from_epsilon_sigma(backend="numba")
+    assert backends.resolve("auto", 10**9) == "numpy"
