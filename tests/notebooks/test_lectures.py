@@ -27,6 +27,7 @@ EXERCISES = {
     "06": ["03_provot"],
     "07": ["02_stiffness", "03_provot", "04_discretization"],
     "08": ["05_xpbd", "03_provot"],
+    "09": ["03_provot"],
 }
 MAX_CODE_LINES = 20
 
@@ -52,6 +53,9 @@ COVERS = {
             "Collider(")),
     "08": (("rigid constraints", "position-based", "xpbd", "substeps", "stiff cloth"),
            ("xpbd_project(", "small_steps_study(", "stiffness_study(", "pendulum_period(", "Prefactored")),
+    "09": (("surface", "particle self-collision", "thickness", "roller", "cost", "step", "fold"),
+           ("TriangleMesh", "intersections(", "orientation(", "box_pairs(", "ClothCollisions", "Cylinder(",
+            "MovingSurface(")),
 }
 
 

@@ -129,6 +129,9 @@ def is_cosmetic(node):
     if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)):
         return False
     name = node.func.attr
+    owner = node.func.value
+    if isinstance(owner, ast.Name) and owner.id[:1].isupper():  # a class's constructor: TriangleMesh.grid(...)
+        return False
     if name in AXIS_METHODS:
         return True
     if name == "set":                                   # ax.set(xlabel=..., ...)
@@ -197,3 +200,10 @@ def test_axis_cosmetics_live_in_one_helper(path):
         f"{path.name}: {len(other)} code cells style axes without a helper defined in the first "
         f"{HELPER_CELLS} code cells (cell, id): {other}; at most {MAX_STYLED_CELLS} may")
     assert not helpers or using, f"{path.name}: the helper {sorted(helpers)} is never called"
+
+
+def test_cosmetics_are_calls_on_axes_not_on_classes():
+    """ax.grid(...) and plt.xlabel(...) style axes; TriangleMesh.grid(...) builds a mesh and does not."""
+    styled = [is_cosmetic(ast.parse(code).body[0].value) for code in
+              ("ax.grid(True)", "plt.xlabel('t')", "ax.set(title='x')", "TriangleMesh.grid(8, 8)", "np.sqrt(2)")]
+    assert styled == [True, True, True, False, False]
