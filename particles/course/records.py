@@ -175,8 +175,27 @@ def _tests(items):
     return [t if isinstance(t, TestRecord) else TestRecord.from_dict(t) for t in items]
 
 
+class _HoldsTests(_Fields):
+    """A record with a list of :class:`TestRecord` in ``tests``: JSON data and back, the tests typed again."""
+
+    _what = "a record"
+
+    def to_dict(self):
+        """The record as JSON data."""
+        data = dataclasses.asdict(self)
+        data["tests"] = [t.to_dict() for t in self.tests]
+        return data
+
+    @classmethod
+    def from_dict(cls, data):
+        """The record of JSON data as :meth:`to_dict` writes it (a missing field is named)."""
+        kwargs = cls._take(data, cls._what)
+        kwargs["tests"] = _tests(kwargs.get("tests", []))
+        return cls(**kwargs)
+
+
 @dataclass
-class SessionRecord(_Fields):
+class SessionRecord(_HoldsTests):
     """What one pytest session reports about one notebook it graded (written by the plugin).
 
     Attributes
@@ -200,6 +219,8 @@ class SessionRecord(_Fields):
         Time of the whole notebook; None while it is not finished.
     """
 
+    _what = "a session record"
+
     id: str
     seed: int
     exercise: str = ""
@@ -218,21 +239,15 @@ class SessionRecord(_Fields):
         return self.seconds is not None
 
     def to_dict(self):
-        data = dataclasses.asdict(self)
-        data["tests"] = [t.to_dict() for t in self.tests]
+        """The record as JSON data (``seconds`` only once the notebook is complete)."""
+        data = super().to_dict()
         if self.seconds is None:
             del data["seconds"]
         return data
 
-    @classmethod
-    def from_dict(cls, data):
-        kwargs = cls._take(data, "a session record")
-        kwargs["tests"] = _tests(kwargs.get("tests", []))
-        return cls(**kwargs)
-
 
 @dataclass
-class SubmissionRecord(_Fields):
+class SubmissionRecord(_HoldsTests):
     """The grade of one student's notebook of one exercise: what the driver keeps and reports.
 
     Attributes
@@ -260,6 +275,8 @@ class SubmissionRecord(_Fields):
         The record was kept from an earlier run.
     """
 
+    _what = "a submission record"
+
     student: str
     exercise: str
     notebook: str = ""
@@ -282,17 +299,6 @@ class SubmissionRecord(_Fields):
     @property
     def max_score(self):
         return score_of(self.tests)[1]
-
-    def to_dict(self):
-        data = dataclasses.asdict(self)
-        data["tests"] = [t.to_dict() for t in self.tests]
-        return data
-
-    @classmethod
-    def from_dict(cls, data):
-        kwargs = cls._take(data, "a submission record")
-        kwargs["tests"] = _tests(kwargs.get("tests", []))
-        return cls(**kwargs)
 
     def summary_lines(self):
         """The lines of Gradescope's top output for this exercise: score, notes, sandbox."""
