@@ -179,29 +179,49 @@ def compare(name, step_result, reference, c, X):
     return step
 
 
+RUN_STEPS = 50  # steps of each timed run (the per-step time of ParticleSystem.run, its divergence guard included)
+
+
+def run_step_time(c, X):
+    """Best time per step of ``c.run`` (symplectic Euler, RUN_STEPS steps from X) with the current backend."""
+    def run():
+        c.set_state(X, 0.0)
+        c.run(RUN_STEPS * H, H, method="symplectic_euler", every=RUN_STEPS)
+    run()
+    return best_time(run, repeat=10) / RUN_STEPS
+
+
 def part1(sizes, threads):
     print("1. One explicit cloth step (springs with damping + gravity + symplectic Euler), ms")
-    print(f"{'particles':>10} {'springs':>8} {'numpy':>8} {'numba':>8} {'forces np':>10} {'forces nb':>10} "
-          f"{'warp cpu':>9} {'taichi':>8} {'np/nb':>7} {'warp/nb':>8} {'taichi/nb':>10}")
+    print("   step: symplectic_euler(f, X, t, h) with the f that ParticleSystem.run passes (numba: the compiled")
+    print("   step, particles.backends.stepped_derivative); run: per step of c.run, its divergence guard included;")
+    print("   forces: c.total_force alone (numba: the per-force kernels)")
+    print(f"{'particles':>10} {'springs':>8} {'numpy':>8} {'numba':>8} {'run np':>8} {'run nb':>8} {'forces np':>10} "
+          f"{'forces nb':>10} {'warp cpu':>9} {'taichi':>8} {'np/nb':>7} {'run np/nb':>10} {'warp/nb':>8} "
+          f"{'taichi/nb':>10}")
     for n in sizes:
         c, X = cloth_state(n)
+        c.set_state(X)
         times = {}
         with backends.using("numpy"):
             reference = symplectic_euler(c.derivative, X, 0.0, H)
         for be in ("numpy", "numba"):
             with backends.using(be):
-                got = symplectic_euler(c.derivative, X, 0.0, H)
+                f = backends.stepped_derivative(c) or c.derivative
+                got = symplectic_euler(f, X, 0.0, H)
                 assert np.abs(got - reference).max() <= 1e-12 * np.abs(reference).max(), be
-                times[be] = best_time(lambda: symplectic_euler(c.derivative, X, 0.0, H), repeat=50)
+                times[be] = best_time(lambda: symplectic_euler(f, X, 0.0, H), repeat=50)
+                times["run " + be] = run_step_time(c, X)
                 times["forces " + be] = best_time(lambda: c.total_force(X, 0.0), repeat=50)
         for name, make in (("warp", lambda: warp_step(c, X)), ("taichi", lambda: taichi_step(c, X, threads))):
             made = make()
             times[name] = None if made is None else best_time(compare(name, made, reference, c, X), repeat=50)
         ms = {key: (f"{1e3 * t:.2f}" if t is not None else "-") for key, t in times.items()}
         ratio = {key: (f"{times[key] / times['numba']:.2f}x" if times.get(key) else "-") for key in times}
-        print(f"{n:>6}^2 {len(flat_springs(c)[0]):>10} {ms['numpy']:>8} {ms['numba']:>8} {ms['forces numpy']:>10} "
-              f"{ms['forces numba']:>10} {ms['warp']:>9} {ms['taichi']:>8} {ratio['numpy']:>7} {ratio['warp']:>8} "
-              f"{ratio['taichi']:>10}")
+        print(f"{n:>6}^2 {len(flat_springs(c)[0]):>10} {ms['numpy']:>8} {ms['numba']:>8} {ms['run numpy']:>8} "
+              f"{ms['run numba']:>8} {ms['forces numpy']:>10} {ms['forces numba']:>10} {ms['warp']:>9} "
+              f"{ms['taichi']:>8} {ratio['numpy']:>7} {times['run numpy'] / times['run numba']:>9.2f}x "
+              f"{ratio['warp']:>8} {ratio['taichi']:>10}")
 
 
 def lj_liquid(n):

@@ -149,6 +149,12 @@ def index_array(value, name, width):
     return a.astype(np.int64)
 
 
+def indices_fit(highest, n, name):
+    """Index arrays must point at particles of the system they act on (NumPy would clip or misplace)."""
+    if highest >= n:
+        raise ValueError(f"{name} refer to particle {highest}, but the system has only {n} particles")
+
+
 def per_item(value, name, size, positive=False):
     """A number or an array of length `size` (one value per spring, joint, ...), >= 0 (> 0), as a float array."""
     a = as_float_array(value, name, ndim=(0, 1))

@@ -52,10 +52,24 @@ class Force:
 
     uses_velocity = True
     uses_time = True
+    _compiled_role = None
 
     def add_to(self, F, x, v, t, m):
         """Add this force into `F` (shape (n, d), newtons), in place."""
         raise NotImplementedError
+
+    @property
+    def compiled_role(self):
+        """What the compiled step (:mod:`particles.backends`) does with this force: "springs", "gravity" or None.
+
+        A class declares its role in ``_compiled_role``; the role holds only
+        while ``add_to`` is that class's own, so that a subclass with another
+        force law is added by its own ``add_to`` (None: the step calls it).
+        """
+        for cls in type(self).__mro__:  # a loop over the few classes of the force's lineage
+            if "_compiled_role" in cls.__dict__:
+                return cls._compiled_role if type(self).add_to is cls.add_to else None
+        return None
 
     def __call__(self, x, v=None, t=0.0, m=1.0):
         """This force alone, for positions `x` and velocities `v`.
@@ -125,6 +139,7 @@ class Gravity(Force):
 
     uses_velocity = False
     uses_time = False
+    _compiled_role = "gravity"  # the compiled step of particles.backends adds g itself
 
     def __init__(self, g):
         self.g = _vector(g, "g")

@@ -27,19 +27,13 @@ References
 import numpy as np
 import scipy.sparse
 
-from ._checks import as_float_array, index_array, per_item
+from ._checks import as_float_array, index_array, indices_fit, per_item
 from ._vectors import unit
 from .backends import check_backend, kernels_for
 from .fields import Force
 from .pairs import pair_differences
 
 __all__ = ["Springs", "Bending", "Clamp", "spring_jacobian_blocks"]
-
-
-def _check_fit(highest, n, name):
-    """Index arrays must point at particles of the system they act on (NumPy would clip or misplace)."""
-    if highest >= n:
-        raise ValueError(f"{name} refer to particle {highest}, but the system has only {n} particles")
 
 
 class Springs(Force):
@@ -76,6 +70,8 @@ class Springs(Force):
     array([[ 5.,  0.],
            [-5.,  0.]])
     """
+
+    _compiled_role = "springs"  # the compiled step of particles.backends computes these itself
 
     def __init__(self, indices, rest_length=None, k=1.0, kd=0.0, x=None, kind=None, backend=None):
         self._backend = check_backend(backend)
@@ -118,7 +114,7 @@ class Springs(Force):
         return self.lengths(x) / self.rest_length - 1.0
 
     def add_to(self, F, x, v, t, m):
-        _check_fit(self._highest, len(x), "indices")
+        indices_fit(self._highest, len(x), "indices")
         if (fast := kernels_for(self._backend, len(x))) is not None:  # compiled, one pass (particles.backends)
             return fast.springs(self, F, x, v)
         d = pair_differences(x, self.i, self.j)             # x_i - x_j, shape (dim, s)
@@ -175,7 +171,7 @@ class Springs(Force):
         """
         x = np.asarray(x, dtype=float)
         n = len(x) if n is None else n
-        _check_fit(self._highest, min(n, len(x)), "indices")
+        indices_fit(self._highest, min(n, len(x)), "indices")
         dim = x.shape[1]
         if damping_position_terms is None:
             damping_position_terms = not clamp
@@ -298,7 +294,7 @@ class Bending(Force):
         return np.arccos(c)
 
     def add_to(self, F, x, v, t, m):
-        _check_fit(self._highest, len(x), "triples")
+        indices_fit(self._highest, len(x), "triples")
         if (fast := kernels_for(self._backend, len(x))) is not None:  # the same, compiled (particles.backends)
             return fast.bending(self, F, x)
         L1, u1, L2, u2, c = self._geometry(x)
@@ -382,7 +378,7 @@ class Clamp(Force):
         return np.arccos(np.clip(np.einsum("as,sa->s", u, self.direction), -1.0, 1.0))
 
     def add_to(self, F, x, v, t, m):
-        _check_fit(self._highest, len(x), "pairs")
+        indices_fit(self._highest, len(x), "pairs")
         e = pair_differences(x, self.j, self.i)  # (d, c)
         L, u = unit(e)
         u0 = self.direction.T

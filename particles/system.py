@@ -21,6 +21,7 @@ References
 import numpy as np
 
 from ._checks import as_float_array, end_time, finite_real, pinned_indices, positive_number
+from .backends import stepped_derivative
 from .integrators import BLOWUP_FACTOR, integrate
 from .steppers import as_stepper
 
@@ -406,10 +407,13 @@ class ParticleSystem:
         next step starts from. When no force depends on the velocities
         (each says so with ``uses_velocity = False``), that force is the
         next step's first one: :class:`_ReusedForces` returns it again.
+        When the system's springs run compiled, the derivative also carries a
+        compiled symplectic Euler step, which that stepper takes instead of
+        its NumPy one (:func:`particles.backends.stepped_derivative`).
         """
         if getattr(step, "fsal", False) and not any(getattr(f, "uses_velocity", True) for f in self.forces):
             return _ReusedForces(self)
-        return self.derivative
+        return stepped_derivative(self) or self.derivative  # with compiled springs: fused steps (backends)
 
     def _stepper(self, method):
         """The stepper form of `method` (see :mod:`particles.steppers`), a solver checked to be this system's."""

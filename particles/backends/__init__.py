@@ -56,6 +56,24 @@ threads are numba's own work queue, not OpenMP's, whose idle threads spin:
 on a machine shared with other processes that made the many short parallel
 loops of an XPBD step several times slower on two threads than on one.
 
+**The compiled step.** A force pass is only part of a step: around it the
+NumPy symplectic Euler step zeroes the force array, divides by the masses,
+clears the pins, and makes the new velocities and positions, each one more
+pass over all particles, and the per-force kernels read the state in the
+system's Fortran order, each coordinate of all particles together. When a
+system's springs run compiled, :meth:`particles.ParticleSystem.run` gives its
+stepper :func:`stepped_derivative` instead of the derivative: with
+:func:`~particles.integrators.symplectic_euler` (alone or inside a wrapper,
+Provot's constraint, a collider) a whole step is then one parallel pass
+over blocks of particles (:mod:`particles.backends._step_kernels`): each
+block copies the particles its springs touch into rows ``(x, v)``, computes
+its springs, adds gravity, and updates its own particles; forces without a
+compiled role (wind, drag, bending) are added by their own ``add_to`` before.
+It agrees with the NumPy step to rounding, has the same bits on any number
+of threads, and is what ``bench/bench_backends.py`` times against Warp.
+Calling ``symplectic_euler(system.derivative, X, t, h)`` directly takes the
+NumPy step (with the per-force kernels), as the slide writes it.
+
 **Why numba.** It compiles plain Python loops over NumPy arrays, so the
 kernel reads as the slide's loop, with the same names; it ships as wheels
 for the platforms the course supports, needs no compiler on the student's
@@ -90,7 +108,7 @@ import os
 import warnings
 
 __all__ = ["BACKENDS", "AUTO_MIN", "available", "check_backend", "resolve", "set_backend", "get_backend",
-           "using", "kernels_for"]
+           "using", "kernels_for", "stepped_derivative"]
 
 BACKENDS = ("auto", "numpy", "numba")
 
@@ -211,3 +229,34 @@ def kernels_for(backend, size):
                       stacklevel=3)
         return None
     return compiled
+
+
+def stepped_derivative(system):
+    """`system`'s derivative, able to take compiled symplectic Euler steps when its springs run compiled; or None.
+
+    :meth:`particles.ParticleSystem.run` hands this to its stepper instead of
+    ``system.derivative`` when it is not None: with the stepper
+    :func:`~particles.integrators.symplectic_euler` (also inside wrappers
+    such as Provot's or the colliders'), a whole step is then one compiled
+    pass (:class:`particles.backends.compiled.SteppedDerivative`); any other
+    stepper just calls it as the derivative.
+
+    Returns
+    -------
+    SteppedDerivative or None
+        None unless the system has one to three
+        :class:`~particles.springs.Springs` sets (``compiled_role ==
+        "springs"``), in 2D or 3D, and all of them resolve to numba for the
+        system's size.
+    """
+    springs = [f for f in system.forces if getattr(f, "compiled_role", None) == "springs"]
+    if not springs or not _all_compiled(springs, system.n):
+        return None
+    from .compiled import SteppedDerivative  # noqa: PLC0415  (loaded by _all_compiled already)
+    derivative = SteppedDerivative(system, _all_compiled)
+    return derivative if derivative.parts(system.n) is not None else None
+
+
+def _all_compiled(forces, n):
+    """Whether every one of `forces` runs on the compiled kernels for `n` particles (each by its ``_backend``)."""
+    return all(kernels_for(backend, n) is not None for backend in {f._backend for f in forces})

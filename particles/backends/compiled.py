@@ -7,15 +7,19 @@ imports numba; :func:`particles.backends.kernels_for` does so only when a
 pass resolves to numba.
 """
 
+import sys
+
 import numpy as np
 
+from .._checks import indices_fit
 from ._kernels import add_windows, bending_forces, gather_pairs, gather_roles
 from ._kernels import incidence, parallel, pick, rank_blocks, spring_forces, spring_scatter, take_rows
 from ._kernels import lennard_jones as lennard_jones_pairs
 from ._kernels import nbody as nbody_sums
 from ._pbd_kernels import distance_group, distance_jacobi
+from ._step_kernels import symplectic_euler_blocks
 
-__all__ = ["springs", "bending", "lennard_jones", "nbody", "distance_project"]
+__all__ = ["springs", "bending", "lennard_jones", "nbody", "distance_project", "SteppedDerivative"]
 
 
 def _store(owner):
@@ -152,3 +156,163 @@ def distance_project(constraints, b, x, x_n, lam, hs, formulation):
     if buffers is None or buffers[0].shape != x.shape:
         buffers = store["buffers"] = np.empty(x.shape), np.empty(x.shape)
     distance_jacobi(x, x_n, lam, i, j, b.L0, b.wi, b.wj, at, inv, gamma, store["scale"], xpbd, damped, *buffers)
+
+
+def _per_spring(a, s):
+    """A spring set's parameter as the kernel reads it: float64, contiguous, one per spring (a scalar spread)."""
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    return a if a.shape == (s,) else np.ascontiguousarray(np.broadcast_to(a, (s,)))
+
+
+# particles per block of the compiled step's spring pass: a number set by the system, not the threads
+STEP_BLOCK = 2048
+
+
+class SteppedDerivative:
+    """A system's derivative that also takes whole symplectic Euler steps in three compiled passes.
+
+    Called as ``f(X, t)``, it is :meth:`particles.ParticleSystem.derivative`.
+    :func:`particles.integrators.symplectic_euler` finds its
+    :meth:`fused_symplectic_euler` and calls it first: a step of the same
+    method, the springs (:class:`~particles.springs.Springs`, all sets in one
+    pass over blocks of particles, :mod:`particles.backends._step_kernels`)
+    and the update of every particle compiled, uniform gravity folded into
+    the update, every other force added by its own ``add_to`` as in
+    :meth:`~particles.ParticleSystem.total_force`. It agrees with the NumPy
+    step to rounding (about 1e-16 relative: the forces are summed in another
+    order) and has the same bits on any number of threads.
+    """
+
+    def __init__(self, system, compiled):
+        self.system = system
+        self.compiled = compiled  # compiled(forces, n): whether all these forces run compiled for n particles
+        self._spare = []  # arrays of earlier new states, to reuse once nobody else holds them
+
+    def __call__(self, X, t):
+        return self.system.derivative(X, t)
+
+    def parts(self, n):
+        """The spring sets, the summed gravity and the other forces; None when the step does not apply.
+
+        By :attr:`~particles.fields.Force.compiled_role`: up to three
+        :class:`~particles.springs.Springs` sets, all resolving to numba, in
+        2D or 3D; gravity folded into the update; the rest added by their own
+        ``add_to``.
+        """
+        d = self.system.d
+        sets, others, G = [], [], np.zeros(d)
+        for force in self.system.forces:  # a loop over the system's few forces
+            role = getattr(force, "compiled_role", None)
+            if role == "springs":
+                sets.append(force)
+            elif role == "gravity" and np.shape(force.g) == (d,):
+                G += force.g
+            else:
+                others.append(force)
+        if not sets or len(sets) > 3 or d not in (2, 3) or not self.compiled(sets, n):
+            return None
+        return sets, G, others
+
+    def _layout(self, sets, n):
+        """The springs by lower end (compressed rows), the springs entering each block, and the blocks' windows.
+
+        Kept on the system until the spring sets or the particle count change;
+        their parameters (``rest_length``, ``k``, ``kd``) are read at every step.
+        """
+        store = _store(self.system)
+        key = (n, tuple((id(f.i), id(f.j), len(f.i)) for f in sets))
+        if store.get("step_key") == key:
+            return store["step_layout"]
+        blocks = max(1, min(64, n // STEP_BLOCK))
+        start = np.arange(blocks + 1) * n // blocks
+        a = np.concatenate([np.minimum(f.i, f.j) for f in sets])
+        order = np.argsort(a, kind="stable")
+        a = a[order]
+        nbr = np.concatenate([np.maximum(f.i, f.j) for f in sets])[order]
+        which = np.concatenate([np.full(len(f.i), q, dtype=np.uint8) for q, f in enumerate(sets)])[order]
+        sidx = np.concatenate([np.arange(len(f.i), dtype=np.uint32) for f in sets])[order]
+        ptr = np.searchsorted(a, np.arange(n + 1))
+        block_a = np.searchsorted(start, a, side="right") - 1
+        block_b = np.searchsorted(start, nbr, side="right") - 1
+        # the springs that enter block c from an earlier one, by upper end: rows of that block too (the force
+        # on the lower end, outside the block, falls on a row of its window that is never used)
+        entering = np.flatnonzero(block_b != block_a)
+        entering = entering[np.argsort(nbr[entering], kind="stable")]
+        inrow, first = np.unique(nbr[entering], return_index=True)
+        bounds = np.append(first, len(entering))  # the entering springs of row u: bounds[u]:bounds[u + 1]
+        incount = np.diff(bounds)
+        rin = np.searchsorted(inrow, start)
+        count = np.diff(ptr)
+        rowp, rcount, ends, entries = [], [], [], []
+        lo, hi = start[:-1].copy(), start[1:].copy()
+        for c in range(blocks):  # a loop over the blocks: each one's rows (its particles, then the entering ends)
+            own = np.arange(ptr[start[c]], ptr[start[c + 1]])
+            enter = entering[bounds[rin[c]]:bounds[rin[c + 1]]]
+            rowp += [np.arange(start[c], start[c + 1]), inrow[rin[c]:rin[c + 1]]]
+            rcount += [count[start[c]:start[c + 1]], incount[rin[c]:rin[c + 1]]]
+            ends += [nbr[own], a[enter]]
+            entries += [own, enter]
+            lo[c] = min(lo[c], a[enter].min(initial=n))
+            hi[c] = max(hi[c], nbr[own].max(initial=0) + 1)
+        entries = np.concatenate(entries)
+        rb0 = np.concatenate([[0], np.cumsum([len(r) for r in rowp[1::2]]) + start[1:]])
+        rptr = np.concatenate([[0], np.cumsum(np.concatenate(rcount))])
+        row0 = np.concatenate([[0], np.cumsum(hi - lo)])
+        d = self.system.d
+        layout = dict(start=start, lo=lo, hi=hi, row0=row0, xw=np.empty((row0[-1], 2 * d)),
+                      fw=np.empty((row0[-1], d)), pinned=None,
+                      rows=(rb0, np.concatenate(rowp).astype(np.uint32), rptr.astype(np.uint32),
+                            np.concatenate(ends).astype(np.uint32), which[entries], sidx[entries]))
+        store.update(step_key=key, step_layout=layout)
+        return layout
+
+    def _new_state(self, shape):
+        """An array for a new state (C order, which the next step reads faster): an earlier one if free, else new.
+
+        A run holds the state it steps from and drops the one before, so two
+        arrays take turns. One is free when this list is its only holder
+        (CPython's reference count: the list, the loop variable and the call's
+        argument), and then no one can see it change; a new array costs a page
+        fault per 4 KiB when first written (about a tenth of the step at 128^2).
+        """
+        for spare in self._spare:  # a loop over at most two arrays
+            if spare.shape == shape and sys.getrefcount(spare) == 3:
+                return spare
+        out = np.empty(shape)
+        self._spare = [out] + self._spare[:1]
+        return out
+
+    def fused_symplectic_euler(self, X, t, h):
+        """One symplectic Euler step from X (n, 2, d) at t by h, compiled; None when it does not apply.
+
+        It does not apply (and the caller takes the NumPy step) when X is not
+        the system's state shape, when a spring set does not resolve to the
+        numba backend (e.g. ``"auto"`` after particles were removed), or when
+        the system has more than three spring sets.
+        """
+        system = self.system
+        n = system.n
+        if X.shape != system.X.shape or X.dtype != np.float64 or (found := self.parts(n)) is None:
+            return None
+        sets, G, others = found
+        for f in sets:  # a loop over the few spring sets
+            indices_fit(f._highest, n, "indices")
+        layout = self._layout(sets, n)
+        arrays = [_per_spring(a, len(f.i)) for f in sets for a in (f.rest_length, f.k, f.kd)]
+        arrays += arrays[:3] * (3 - len(sets))  # unused slots (no entry refers to them)
+        other = np.zeros((n if others else 1, system.d))
+        for force in others:  # a loop over the other forces: each adds its own, as in total_force
+            force.add_to(other, X[:, 0], X[:, 1], t, system.m)
+        pinned = system.pinned
+        if layout["pinned"] is None or pinned.shape != layout["pinned"].shape or not (pinned == layout["pinned"]).all():
+            layout["free"] = np.ones(n, dtype=np.bool_)
+            layout["free"][system.pinned] = False
+            layout["pinned"] = system.pinned.copy()
+        out = self._new_state(X.shape)
+        copy = not X.flags.c_contiguous  # rows (x_p, v_p) of a C-ordered state are read where they are
+        xw = layout["xw"] if copy else X.reshape(n, 2 * system.d)
+        pick(symplectic_euler_blocks, len(layout["rows"][3]))(
+            X, copy, layout["start"], layout["lo"], layout["hi"], layout["row0"], xw, layout["fw"],
+            *layout["rows"], *arrays, other, bool(others),
+            np.ascontiguousarray(system.m, dtype=np.float64), layout["free"], tuple(G.tolist()), float(h), out)
+        return out

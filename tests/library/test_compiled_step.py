@@ -1,0 +1,205 @@
+"""The compiled symplectic Euler step of a mass-spring system (particles.backends.compiled.SteppedDerivative).
+
+With the springs on numba, :meth:`ParticleSystem.run` hands its stepper a
+derivative that also takes whole symplectic Euler steps in one compiled
+pass. These tests compare its runs with the NumPy runs (1e-12 relative) on
+cloths, strings and hair, with every kind of force beside the springs, with
+blocks small enough that springs cross several of them, and check that it
+follows what the user changes between steps (stiffness in place, pins,
+particles removed), that it is the same on one thread and on two, and that
+it steps aside where it does not apply.
+"""
+
+import numpy as np
+import pytest
+
+from particles import backends
+from particles.constraints import ProvotConstraint
+from particles.errors import SimulationDiverged
+from particles.forces import Damping
+from particles.integrators import symplectic_euler
+from particles.massspring import cloth, hair, string
+from particles.springs import Springs
+
+pytestmark = pytest.mark.skipif("numba" not in backends.available(),
+                                reason="numba is not installed (pip install 'particles[fast]')")
+
+H = 1e-4  # s
+
+
+def _close(a, b, rtol=1e-12):
+    """Arrays equal to `rtol` relative to their largest entry."""
+    a, b = np.asarray(a), np.asarray(b)
+    assert a.shape == b.shape
+    assert np.abs(a - b).max(initial=0.0) <= rtol * max(np.abs(a).max(initial=0.0), 1e-300)
+
+
+def _shaken(system, seed=0):
+    """`system` with its free particles moved off rest and moving (pinned ones stay at rest)."""
+    X = system.state()
+    rng = np.random.default_rng(seed)
+    free = np.setdiff1d(np.arange(system.n), system.pinned)
+    X[free, 0] += rng.normal(scale=0.01, size=(len(free), system.d))
+    X[free, 1] = rng.normal(scale=0.1, size=(len(free), system.d))
+    system.set_state(X, 0.0)
+    return system
+
+
+def _systems():
+    """Mass-spring systems of every shape the compiled step handles (name, builder)."""
+    return [
+        ("cloth, three damped sets, two pins", lambda: cloth(12, 12, kd=0.05)),
+        ("cloth, undamped", lambda: cloth(10, 9, kd=0.0)),
+        ("cloth with air damping and wind", lambda: cloth(10, 10, kd=0.02, damping=0.1, wind=[0.5, 0.0, 0.2])),
+        ("string in 2D", lambda: string(30, kd=0.01)),
+        ("string in 3D", lambda: string(30, d=3, kd=0.01)),
+        ("hair: springs beside bending and a clamp", lambda: hair(25, kd=0.001)),
+    ]
+
+
+def _runs(make, steps=5, method="symplectic_euler", block=None, monkeypatch=None):
+    """The end states of the same run with every force on NumPy, then on numba."""
+    out = {}
+    for backend in ("numpy", "numba"):
+        system = _shaken(make())
+        if block is not None:
+            from particles.backends import compiled
+            monkeypatch.setattr(compiled, "STEP_BLOCK", block)
+        with backends.using(backend):
+            t, X = system.run(steps * H, H, method=method(system) if callable(method) else method)
+        out[backend] = X[-1]
+    return out["numpy"], out["numba"]
+
+
+@pytest.mark.parametrize("name, make", _systems(), ids=[n for n, _ in _systems()])
+def test_compiled_runs_agree_with_numpy_runs(name, make):
+    """Five steps of every system: the compiled step and the NumPy step agree to 1e-12 relative."""
+    reference, compiled_run = _runs(make)
+    _close(reference, compiled_run)
+
+
+@pytest.mark.parametrize("block", [1, 7, 16, 40])
+def test_blocks_smaller_than_a_spring_agree(block, monkeypatch):
+    """Blocks of 1 to 40 particles on a 12 x 12 cloth (flexion springs cross two or more blocks): still 1e-12."""
+    reference, compiled_run = _runs(lambda: cloth(12, 12, kd=0.05), block=block, monkeypatch=monkeypatch)
+    _close(reference, compiled_run)
+
+
+def test_the_run_takes_the_compiled_step_and_numpy_does_not():
+    """With numba the run's derivative carries the compiled step (and symplectic_euler takes it); with NumPy, not."""
+    system = _shaken(cloth(8, 8, kd=0.05))
+    with backends.using("numpy"):
+        assert backends.stepped_derivative(system) is None
+        assert system._rhs(symplectic_euler) == system.derivative
+    with backends.using("numba"):
+        f = backends.stepped_derivative(system)
+        X = system.state()
+        fused = f.fused_symplectic_euler(X, 0.0, H)
+        np.testing.assert_array_equal(symplectic_euler(f, X, 0.0, H), fused)
+        np.testing.assert_array_equal(f(X, 0.0), system.derivative(X, 0.0))  # and it is the derivative
+        _close(symplectic_euler(system.derivative, X, 0.0, H), fused)
+    np.testing.assert_array_equal(X, system.state())  # the state given is not modified
+
+
+def test_the_same_bits_on_one_thread_and_on_two(monkeypatch):
+    """A 24 x 24 cloth in blocks of 50 particles: one thread, two threads and the serial kernel give the same bits."""
+    import numba
+
+    from particles.backends import _kernels, compiled
+
+    monkeypatch.setattr(compiled, "STEP_BLOCK", 50)
+    system = _shaken(cloth(24, 24, kd=0.05))
+    X = system.state()
+    before = numba.get_num_threads()
+    results = []
+    try:
+        for threads, parallel_min in ((1, 0), (min(2, numba.config.NUMBA_NUM_THREADS), 0), (1, 10**9)):
+            monkeypatch.setattr(_kernels, "PARALLEL_MIN", parallel_min)  # 0: the parallel kernel; 10**9: serial
+            numba.set_num_threads(threads)
+            with backends.using("numba"):
+                results.append(backends.stepped_derivative(system).fused_symplectic_euler(X, 0.0, H))
+    finally:
+        numba.set_num_threads(before)
+    for other in results[1:]:
+        np.testing.assert_array_equal(other, results[0])
+
+
+def test_changes_between_steps_are_followed():
+    """A stiffness changed in place, new pins and added particles: each next step agrees with NumPy's."""
+    def changed(backend):
+        system = _shaken(cloth(10, 10, kd=0.05))
+        with backends.using(backend):
+            system.run(3 * H, H, method="symplectic_euler")
+            system.springs["shear"].k *= 3.0  # in place: the same array
+            system.run(system.t + 3 * H, H, method="symplectic_euler")
+            X = system.state()
+            X[5, 1] = 0.0
+            system.set_state(X)
+            system.pinned = np.append(system.pinned, 5)
+            system.run(system.t + 3 * H, H, method="symplectic_euler")
+            system.add_particles([[0.0, 0.0, -2.0], [0.1, 0.0, -2.0]], v=[[0.0, 0.0, 1.0], [0.0, 0.5, 0.0]], m=0.01)
+            system.run(system.t + 3 * H, H, method="symplectic_euler")
+        return system.state()
+
+    _close(changed("numpy"), changed("numba"))
+
+
+def test_wrapped_steppers_take_the_compiled_step_too():
+    """Provot's constraint around symplectic Euler: the run agrees with NumPy's (its inner step is compiled)."""
+    def provot(system):
+        s = system.springs["structural"]
+        return ProvotConstraint(s.indices, s.rest_length, system.n, pinned=system.pinned).stepper("symplectic_euler")
+
+    reference, compiled_run = _runs(lambda: cloth(10, 10, kd=0.05), method=provot)
+    _close(reference, compiled_run)
+
+
+class _Stiffer(Springs):
+    """Springs with their own force law (twice the stiffness): the compiled step must not take them for Springs."""
+
+    def add_to(self, F, x, v, t, m):
+        G = np.zeros_like(F)
+        super().add_to(G, x, v, t, m)
+        F += 2.0 * G
+
+
+def test_where_it_does_not_apply_the_numpy_step_is_taken():
+    """A Springs subclass with its own add_to, four spring sets, other steppers: no compiled step, right results."""
+    def subclassed():
+        system = _shaken(string(20, kd=0.01))
+        s = system.forces[0]
+        system.forces[0] = _Stiffer(s.indices, s.rest_length, k=s.k, kd=s.kd)
+        return system
+
+    def four_sets():
+        system = _shaken(cloth(8, 8, kd=0.05))
+        s = system.springs["structural"]
+        half = len(s) // 2
+        system.forces += [Springs(s.indices[:half], s.rest_length[:half], k=1.0),
+                          Springs(s.indices[half:], s.rest_length[half:], k=1.0)]
+        return system
+
+    assert subclassed().forces[0].compiled_role is None and string(3).forces[0].compiled_role == "springs"
+    for make in (subclassed, four_sets):
+        with backends.using("numba"):
+            f = backends.stepped_derivative(make())
+            assert f is None or f.fused_symplectic_euler(f.system.state(), 0.0, H) is None
+        _close(*_runs(make))
+    _close(*_runs(lambda: cloth(8, 8, kd=0.05), method="verlet"))  # verlet calls it as the derivative
+
+
+def test_a_diverging_compiled_run_is_reported_with_its_step():
+    """A step far above the stability limit: SimulationDiverged names symplectic Euler and the step."""
+    system = _shaken(cloth(8, 8, kd=0.0, k_structural=1e4))
+    with backends.using("numba"), pytest.raises(SimulationDiverged, match=r"symplectic_euler.*|step \d+"):
+        system.run(1.0, 0.05, method="symplectic_euler")
+
+
+def test_other_forces_get_the_state_as_total_force_gives_it():
+    """Damping and a Springs set beside the cloth's: the compiled step adds them as total_force does."""
+    def extra():
+        system = _shaken(cloth(9, 9, kd=0.05))
+        system.forces.append(Damping(0.3))
+        return system
+
+    _close(*_runs(extra))
