@@ -53,24 +53,27 @@ if numba is not None and "NUMBA_CACHE_DIR" not in os.environ and _cache_folder()
 PARALLEL_MIN = 16384
 
 
-def _compile(fn, parallel):
+def _compile(fn, parallel, fastmath=False):
     """``numba.njit`` with the machine code cached on disk; in memory only when no cache folder is writable."""
     if numba is None:
         return fn
     try:
-        return numba.njit(cache=True, parallel=parallel)(fn)
+        return numba.njit(cache=True, parallel=parallel, fastmath=fastmath)(fn)
     except RuntimeError:  # numba found no writable cache location (a read-only install)
-        return numba.njit(cache=False, parallel=parallel)(fn)
+        return numba.njit(cache=False, parallel=parallel, fastmath=fastmath)(fn)
 
 
-def _jit(parallel=False):
-    """Compile `fn`; with `parallel`, also a one-thread copy, ``kernel.serial`` (the same bits, no threads)."""
+def _jit(parallel=False, fastmath=False):
+    """Compile `fn`; with `parallel`, also a one-thread copy, ``kernel.serial`` (the same bits, no threads).
+
+    `fastmath` as numba takes it: a set of LLVM flags (e.g. ``{"contract"}``, fused multiply-adds), or False.
+    """
     def wrap(fn):
-        kernel = _compile(fn, parallel)
+        kernel = _compile(fn, parallel, fastmath)
         if parallel and numba is not None:  # a copy under its own name, so that the two have their own cache files
             copy = types.FunctionType(fn.__code__, fn.__globals__, fn.__name__ + "_serial", fn.__defaults__)
             copy.__qualname__ = fn.__qualname__ + "_serial"
-            kernel.serial = _compile(copy, False)
+            kernel.serial = _compile(copy, False, fastmath)
         return kernel
     return wrap
 
@@ -238,7 +241,7 @@ def gather_roles(F, g, ptr, col, b):
             F[p, c] += (s0 + s1) + s2
 
 
-@_jit()
+@_jit(parallel=True)
 def take_rows(x, perm, xs):
     """``xs[r] = x[perm[r]]``: positions by rank."""
     for r in prange(len(perm)):
@@ -247,14 +250,9 @@ def take_rows(x, perm, xs):
 
 
 @_jit()
-def _power(u, p):
-    """``u ** p`` as particles.lennardjones._power computes it: repeated products for integers 1..16."""
-    if p == math.floor(p) and 1 <= p <= 16:
-        result = u
-        for _ in range(int(p) - 1):
-            result *= u
-        return result
-    return u ** p
+def integer_power(p):
+    """``int(p)`` when particles.lennardjones._power computes ``u ** p`` as repeated products (1..16), else 0."""
+    return int(p) if p == math.floor(p) and 1 <= p <= 16 else 0
 
 
 @_jit()
@@ -270,7 +268,7 @@ def rank_blocks(i, j, n, blocks):
     for r in range(n):
         ptr[r + 1] += ptr[r]
     fill = ptr[:-1].copy()
-    nbr = np.empty(len(i), dtype=np.int64)
+    nbr = np.empty(len(i), dtype=np.uint32)  # unsigned: the pair loop skips numba's test for negative indices
     for e in range(len(i)):  # pairs in list order within each rank
         nbr[fill[i[e]]] = j[e]
         fill[i[e]] += 1
@@ -296,6 +294,7 @@ def lennard_jones(xs, ptr, nbr, start, lo, offset, k1, k2, p, q, rc2, box, perio
     """
     dim = xs.shape[1]
     three = dim == 3
+    iq, ipq, same = integer_power(q), integer_power(p - q), p - q == q  # decided once, not per pair
     h0, h1 = 0.5 * box[0], 0.5 * box[1]
     h2 = 0.5 * box[2] if three else 0.0
     for c in prange(len(lo)):
@@ -320,8 +319,16 @@ def lennard_jones(xs, ptr, nbr, start, lo, offset, k1, k2, p, q, rc2, box, perio
                         d2 -= np.rint(d2 * (1.0 / box[2])) * box[2]
                 r2 = d0 * d0 + d1 * d1 + d2 * d2
                 u = 1.0 / r2 if r2 < rc2 else 0.0
-                s_q = _power(u, q)
-                virial = (s_q if p - q == q else _power(u, p - q)) * k1
+                s_q = u if iq > 0 else u ** q  # u ** q, u ** (p - q) as products when the powers are integers
+                for _ in range(iq - 1):
+                    s_q *= u
+                if same:
+                    virial = s_q * k1
+                else:
+                    s_pq = u if ipq > 0 else u ** (p - q)
+                    for _ in range(ipq - 1):
+                        s_pq *= u
+                    virial = s_pq * k1
                 virial -= k2
                 virial *= s_q
                 total += virial
@@ -342,18 +349,23 @@ def lennard_jones(xs, ptr, nbr, start, lo, offset, k1, k2, p, q, rc2, box, perio
         virials[c] = total
 
 
-@_jit()
-def add_windows(F, perm, lo, hi, offset, sums):
-    """``Fs[window] += sums`` block after block (by rank); then ``F[perm] += Fs``."""
-    n, dim = F.shape
-    Fs = np.zeros((n, dim))
-    for c in range(len(lo)):
-        for r in range(hi[c] - lo[c]):
+@_jit(parallel=True)
+def add_windows(F, perm, start, lo, hi, offset, sums, Fs):
+    """``Fs[window] += sums`` block after block (by rank, Fs (n, d) cleared first); then ``F[perm] += Fs``.
+
+    In parallel over the blocks of ranks ``start[b]:start[b + 1]``: each adds, for its own ranks,
+    the windows that hold them in block order, as one pass over the windows would: the same bits.
+    """
+    dim = F.shape[1]
+    for b in prange(len(start) - 1):
+        Fs[start[b]:start[b + 1]] = 0.0
+        for c in range(len(lo)):
+            for r in range(max(lo[c], start[b]), min(hi[c], start[b + 1])):
+                for a in range(dim):
+                    Fs[r, a] += sums[offset[c] + (r - lo[c]) * dim + a]
+        for r in range(start[b], start[b + 1]):
             for a in range(dim):
-                Fs[lo[c] + r, a] += sums[offset[c] + r * dim + a]
-    for r in range(n):
-        for a in range(dim):
-            F[perm[r], a] += Fs[r, a]
+                F[perm[r], a] += Fs[r, a]
 
 
 @_jit(parallel=True)

@@ -33,7 +33,7 @@ import math
 from ._kernels import _jit, prange
 
 
-@_jit(parallel=True)
+@_jit(parallel=True, fastmath={"contract"})  # fused multiply-adds: rounding differs from NumPy's by ~1e-16
 def symplectic_euler_blocks(X, copy, start, lo, hi, row0, xw, fw, rb0, rowp, rptr, other_end, which, sidx,
                             L0a, ka, kda, L0b, kb, kdb, L0c, kc, kdc, other, has_other, m, free, G, h, out):
     """One step for up to three spring sets: ``v + h a``, then ``x + h v_new``, into out (n, 2, d).

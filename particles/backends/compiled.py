@@ -106,16 +106,17 @@ def lennard_jones(force, F, x, perm, i, j, box):
         ptr, nbr, start, lo, hi = rank_blocks(i.astype(np.int64), j.astype(np.int64), n, blocks)
         offset = np.concatenate([[0], np.cumsum((hi - lo) * d)]).astype(np.int64)
         store.update(pairs=i, n=n, lists=(ptr, nbr, start), windows=(lo, hi, offset), sums=np.empty(offset[-1]),
-                     virials=np.empty(blocks))
+                     virials=np.empty(blocks), rows=np.empty((n, d)), by_rank=np.empty((n, d)))
     (ptr, nbr, start), (lo, hi, offset) = store["lists"], store["windows"]
-    xs = np.empty((n, d))
-    take_rows(_float_rows(x), perm, xs)
+    xs = store["rows"] if store["rows"].shape == (n, d) else np.empty((n, d))  # kept: no page faults
+    pick(take_rows, n)(_float_rows(x), perm, xs)
     periodic = box is not None
     L = np.asarray(box, dtype=float) if periodic else np.ones(d)
     p, q = (force.m_exp - 1) / 2, (force.n_exp - 1) / 2
     pick(lennard_jones_pairs, len(i))(xs, ptr, nbr, start, lo, offset, force.k1, force.k2, p, q, force.cutoff**2, L,
                                       periodic, store["sums"], store["virials"])
-    add_windows(F, perm, lo, hi, offset, store["sums"])
+    by_rank = store["by_rank"] if store["by_rank"].shape == (n, d) else np.empty((n, d))
+    pick(add_windows, n)(F, perm, start, lo, hi, offset, store["sums"], by_rank)
     return float(sum(store["virials"].tolist()))  # block after block
 
 
