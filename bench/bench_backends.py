@@ -5,9 +5,9 @@ In one run, on the same springs and the same pairs:
 1. One explicit step of a hanging cloth (structural, shear and flexion
    springs, all with damping along the spring, gravity, two pinned corners,
    float64), 64^2 and 128^2 particles: the library's symplectic Euler step
-   with ``backend="numpy"`` and ``backend="numba"``, each called with the
-   derivative that ``ParticleSystem.run`` passes (with numba the compiled
-   step, :func:`particles.backends.stepped_derivative`), then per step of
+   with ``backend="numpy"`` and ``backend="numba"``, called as
+   ``symplectic_euler(c.derivative, X, t, h)`` (with numba the compiled
+   step, :meth:`particles.ParticleSystem.fused_symplectic_euler`), then per step of
    ``run`` itself (its divergence guard included), and the force pass
    alone; then the same step written as a Warp kernel on its CPU backend
    (one thread) and as a Taichi kernel on the CPU (as many threads as numba),
@@ -212,8 +212,8 @@ def one_thread():
 
 def part1(sizes, threads):
     print("1. One explicit cloth step (springs with damping + gravity + symplectic Euler), ms")
-    print("   step: symplectic_euler(f, X, t, h) with the f that ParticleSystem.run passes (numba: the compiled")
-    print("   step, particles.backends.stepped_derivative); run: per step of c.run, its divergence guard included;")
+    print("   step: symplectic_euler(c.derivative, X, t, h) (numba: the compiled step of the system);")
+    print("   run: per step of c.run, its divergence guard included;")
     print("   forces: c.total_force alone (numba: the per-force kernels); 1 thread: the compiled step on one thread")
     print(f"{'particles':>10} {'springs':>8} {'numpy':>8} {'numba':>8} {'1 thread':>8} {'run np':>8} {'run nb':>8} "
           f"{'forces np':>10} "
@@ -228,7 +228,7 @@ def part1(sizes, threads):
         for _ in range(ROUNDS):  # rounds spread over a second or so: the best of each is kept
             for be in ("numpy", "numba"):
                 with backends.using(be):
-                    f = backends.stepped_derivative(c) or c.derivative
+                    f = c.derivative  # with numba, symplectic_euler takes the compiled step of its system
                     got = symplectic_euler(f, X, 0.0, H)
                     assert np.abs(got - reference).max() <= 1e-12 * np.abs(reference).max(), be
                     for key, t in ((be, best_time(lambda: symplectic_euler(f, X, 0.0, H), repeat=50)),

@@ -231,14 +231,15 @@ def symplectic_euler(f, X, t, h):
     ``w h < 2`` and the energy error stays bounded (it oscillates, it does not
     drift) over arbitrarily long runs [2]_.
 
-    When `f` has a method ``fused_symplectic_euler(X, t, h)`` (the derivative
-    :meth:`particles.ParticleSystem.run` passes when the system's springs run
-    compiled, :func:`particles.backends.stepped_derivative`), the step is
-    taken by it: the same method in one compiled pass, equal to this code to
-    rounding.
+    When `f` has a method ``fused_symplectic_euler(X, t, h)``, or is the
+    ``derivative`` of an object that has one (a
+    :class:`~particles.ParticleSystem`), and that method returns a state, the
+    step is that state: the same method in one compiled pass when the
+    system's springs run compiled (:func:`particles.backends.stepped_derivative`),
+    equal to this code to rounding.
     """
     X, h = _arguments(X, t, h)
-    fused = getattr(f, "fused_symplectic_euler", None)  # a system's compiled step (particles.backends)
+    fused = _compiled_step(f)  # a system's step in one compiled pass (particles.backends), or None
     if fused is not None and (X_new := fused(X, t, h)) is not None:
         return X_new
     x, v = _split(X)
@@ -247,6 +248,14 @@ def symplectic_euler(f, X, t, h):
     X_new[:, 1] = v + h * a
     X_new[:, 0] = x + h * X_new[:, 1]
     return X_new
+
+
+def _compiled_step(f):
+    """`f`'s ``fused_symplectic_euler``, or its owner's when `f` is a bound ``derivative`` method; else None."""
+    fused = getattr(f, "fused_symplectic_euler", None)
+    if fused is None and getattr(f, "__name__", None) == "derivative":
+        fused = getattr(getattr(f, "__self__", None), "fused_symplectic_euler", None)
+    return fused
 
 
 @_stepper(order=2, second_order_layout=True, fsal=True)

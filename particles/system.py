@@ -314,6 +314,28 @@ class ParticleSystem:
             dX[self.pinned] = 0.0
         return dX
 
+    def fused_symplectic_euler(self, X, t, h):
+        """A symplectic Euler step from X, in one compiled pass when the springs run compiled; else None.
+
+        :func:`particles.integrators.symplectic_euler` calls it when given
+        this system's :meth:`derivative` (:func:`particles.backends.stepped_derivative`).
+
+        Parameters
+        ----------
+        X : ndarray, shape (n, 2, d)
+            Positions (m) and velocities (m/s), float64. Not modified.
+        t, h : float
+            Time and time step, in seconds.
+
+        Returns
+        -------
+        ndarray, shape (n, 2, d), or None
+            The new state; None when no compiled step applies (then the
+            stepper takes its NumPy step).
+        """
+        stepped = stepped_derivative(self)
+        return None if stepped is None else stepped.fused_symplectic_euler(X, t, h)
+
     def reaction_forces(self, X=None, t=None):
         """Force each pin exerts on its particle, by inverse dynamics.
 

@@ -71,8 +71,10 @@ its springs, adds gravity, and updates its own particles; forces without a
 compiled role (wind, drag, bending) are added by their own ``add_to`` before.
 It agrees with the NumPy step to rounding, has the same bits on any number
 of threads, and is what ``bench/bench_backends.py`` times against Warp.
-Calling ``symplectic_euler(system.derivative, X, t, h)`` directly takes the
-NumPy step (with the per-force kernels), as the slide writes it.
+``symplectic_euler(system.derivative, X, t, h)`` called directly takes it
+too (:meth:`particles.ParticleSystem.fused_symplectic_euler`); with the
+NumPy backend (or below :data:`AUTO_MIN` particles on ``"auto"``) the step
+is the slide's, bit for bit.
 
 **Why numba.** It compiles plain Python loops over NumPy arrays, so the
 kernel reads as the slide's loop, with the same names; it ships as wheels

@@ -165,29 +165,39 @@ def _per_spring(a, s):
     return a if a.shape == (s,) else np.ascontiguousarray(np.broadcast_to(a, (s,)))
 
 
+def _count_alone():
+    """The reference count of an object held by a list only, read as :meth:`SteppedDerivative._new_state` reads it."""
+    for probe in [object()]:  # the same holders: the list, the loop variable, the call's argument
+        return sys.getrefcount(probe)
+
+
+_ALONE = _count_alone()
+
 # particles per block of the compiled step's spring pass: a number set by the system, not the threads
 STEP_BLOCK = 2048
 
 
 class SteppedDerivative:
-    """A system's derivative that also takes whole symplectic Euler steps in three compiled passes.
+    """A system's derivative that also takes whole symplectic Euler steps in one compiled pass.
 
     Called as ``f(X, t)``, it is :meth:`particles.ParticleSystem.derivative`.
     :func:`particles.integrators.symplectic_euler` finds its
     :meth:`fused_symplectic_euler` and calls it first: a step of the same
-    method, the springs (:class:`~particles.springs.Springs`, all sets in one
-    pass over blocks of particles, :mod:`particles.backends._step_kernels`)
-    and the update of every particle compiled, uniform gravity folded into
-    the update, every other force added by its own ``add_to`` as in
+    method in one parallel pass over blocks of particles
+    (:mod:`particles.backends._step_kernels`), the springs
+    (:class:`~particles.springs.Springs`, up to three sets) and the update of
+    every particle compiled, uniform gravity folded into the update, every
+    other force added by its own ``add_to`` as in
     :meth:`~particles.ParticleSystem.total_force`. It agrees with the NumPy
     step to rounding (about 1e-16 relative: the forces are summed in another
-    order) and has the same bits on any number of threads.
+    order, with fused multiply-adds) and has the same bits on any number of
+    threads.
     """
 
     def __init__(self, system, compiled):
         self.system = system
         self.compiled = compiled  # compiled(forces, n): whether all these forces run compiled for n particles
-        self._spare = []  # arrays of earlier new states, to reuse once nobody else holds them
+        self._spare = _store(system).setdefault("spare", [])  # earlier new states, reused once nobody holds them
 
     def __call__(self, X, t):
         return self.system.derivative(X, t)
@@ -272,15 +282,16 @@ class SteppedDerivative:
 
         A run holds the state it steps from and drops the one before, so two
         arrays take turns. One is free when this list is its only holder
-        (CPython's reference count: the list, the loop variable and the call's
-        argument), and then no one can see it change; a new array costs a page
-        fault per 4 KiB when first written (about a tenth of the step at 128^2).
+        (CPython's reference count, compared with that of an object only a
+        list holds, :data:`_ALONE`), and then no one can see it change; a new
+        array costs a page fault per 4 KiB when first written (about a tenth
+        of the step at 128^2).
         """
         for spare in self._spare:  # a loop over at most two arrays
-            if spare.shape == shape and sys.getrefcount(spare) == 3:
+            if spare.shape == shape and sys.getrefcount(spare) == _ALONE:
                 return spare
         out = np.empty(shape)
-        self._spare = [out] + self._spare[:1]
+        self._spare[:] = [out] + self._spare[:1]
         return out
 
     def fused_symplectic_euler(self, X, t, h):

@@ -86,7 +86,8 @@ def test_blocks_smaller_than_a_spring_agree(block, monkeypatch):
 
 
 def test_the_run_takes_the_compiled_step_and_numpy_does_not():
-    """With numba the run's derivative carries the compiled step (and symplectic_euler takes it); with NumPy, not."""
+    """With numba the run's derivative carries the compiled step, symplectic_euler takes it (also given
+    system.derivative); with NumPy, neither."""
     system = _shaken(cloth(8, 8, kd=0.05))
     with backends.using("numpy"):
         assert backends.stepped_derivative(system) is None
@@ -97,7 +98,11 @@ def test_the_run_takes_the_compiled_step_and_numpy_does_not():
         fused = f.fused_symplectic_euler(X, 0.0, H)
         np.testing.assert_array_equal(symplectic_euler(f, X, 0.0, H), fused)
         np.testing.assert_array_equal(f(X, 0.0), system.derivative(X, 0.0))  # and it is the derivative
-        _close(symplectic_euler(system.derivative, X, 0.0, H), fused)
+        np.testing.assert_array_equal(symplectic_euler(system.derivative, X, 0.0, H), fused)  # called directly too
+    with backends.using("numpy"):
+        reference = symplectic_euler(system.derivative, X, 0.0, H)
+        assert system.fused_symplectic_euler(X, 0.0, H) is None
+    _close(reference, fused)
     np.testing.assert_array_equal(X, system.state())  # the state given is not modified
 
 
@@ -203,3 +208,21 @@ def test_other_forces_get_the_state_as_total_force_gives_it():
         return system
 
     _close(*_runs(extra))
+
+
+def test_a_state_still_held_is_never_reused():
+    """Steps whose results are kept: each is a new array and keeps its values; a dropped one may be reused."""
+    system = _shaken(cloth(8, 8, kd=0.05))
+    X = system.state()
+    with backends.using("numba"):
+        f = backends.stepped_derivative(system)
+        first = f.fused_symplectic_euler(X, 0.0, H)
+        kept = first.copy()
+        view = f.fused_symplectic_euler(X, 0.0, 2 * H)[:, 0]  # only a view of the second is held
+        third = f.fused_symplectic_euler(X, 0.0, 3 * H)
+        assert not np.shares_memory(third, first) and not np.shares_memory(third, view)
+        np.testing.assert_array_equal(first, kept)
+        _close(view, symplectic_euler(system.derivative, X, 0.0, 2 * H)[:, 0])
+        del first, view
+        again = f.fused_symplectic_euler(X, 0.0, H)
+        np.testing.assert_array_equal(again, kept)
