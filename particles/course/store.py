@@ -44,7 +44,8 @@ class RecordStore:
         """Write one notebook's :class:`~particles.course.records.SubmissionRecord` (atomically: a new file, renamed)."""
         target = self.path(result.student, result.exercise)
         data = dict(result.to_dict(), options=self.options)
-        handle, name = tempfile.mkstemp(dir=self.folder, prefix=".record-", suffix=".json")
+        # not "*.json" until renamed: a driver killed while writing leaves no file that reads as a record
+        handle, name = tempfile.mkstemp(dir=self.folder, prefix=".record-", suffix=".part")
         try:
             with os.fdopen(handle, "w") as stream:
                 json.dump(data, stream, indent=1)

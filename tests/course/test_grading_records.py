@@ -115,6 +115,24 @@ def test_a_killed_driver_keeps_its_records(tmp_path):
     assert "sandbox: " in done.stdout
 
 
+def test_a_record_cut_off_before_its_rename_is_no_record(tmp_path, monkeypatch):
+    """Killed between writing and renaming: the folder holds no ``*.json`` but the finished ones, nothing to load."""
+    from particles.course.records import SubmissionRecord
+    from particles.course.store import RecordStore
+
+    subs, out = tmp_path / "subs", tmp_path / "out"
+    _write(subs, "s0", corpus.MASTER.read_text())
+    grade([subs], out, seed=3, root=ROOT)
+    store = RecordStore(out / "records", {"other": "options"})
+    (record,) = [json.loads(p.read_text()) for p in (out / "records").glob("*.json")]
+    monkeypatch.setattr(os, "replace", lambda *args: None)  # the rename never happens
+    store.path("s0_00_warmup", "00_warmup").unlink()
+    record.pop("options")
+    store.save(SubmissionRecord.from_dict(record))
+    assert list((out / "records").glob("*.json")) == []
+    assert len(list((out / "records").glob(".record-*"))) == 1
+
+
 def test_a_changed_library_fails_the_run_loudly(tmp_path, monkeypatch):
     """When the library differs at the end of a run, grade raises LibraryChanged and marks the outputs."""
     subs, out = tmp_path / "subs", tmp_path / "out"
