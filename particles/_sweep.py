@@ -156,8 +156,12 @@ def candidate_elements(mesh, x0, x1, pad, vertices=None):
     return candidates_in_boxes(mesh, lo, hi, pad, vertices)
 
 
-def candidates_in_boxes(mesh, lo, hi, pad, vertices=None):
-    """:func:`candidate_elements` from the vertices' boxes ``(lo, hi)`` (faces and edges get their union)."""
+def candidates_in_boxes(mesh, lo, hi, pad, vertices=None, pairs=box_pairs):
+    """:func:`candidate_elements` from the vertices' boxes ``(lo, hi)`` (faces and edges get their union).
+
+    `pairs(lo_a, hi_a, lo_b, hi_b)` finds the overlapping boxes of the masked search (default: the grid of
+    :func:`particles.intersections.box_pairs`).
+    """
     F, E = mesh.faces, mesh.edges
     v_lo, v_hi = lo - pad, hi + pad
     f_lo, f_hi = v_lo[F].min(axis=1), v_hi[F].max(axis=1)
@@ -169,11 +173,11 @@ def candidates_in_boxes(mesh, lo, hi, pad, vertices=None):
         sv = np.flatnonzero(vertices)
         sf = np.flatnonzero(vertices[F].any(axis=1))
         se = np.flatnonzero(vertices[E].any(axis=1))
-        a, b = box_pairs(v_lo[sv], v_hi[sv], f_lo, f_hi)
-        c, d = box_pairs(v_lo, v_hi, f_lo[sf], f_hi[sf])
+        a, b = pairs(v_lo[sv], v_hi[sv], f_lo, f_hi)
+        c, d = pairs(v_lo, v_hi, f_lo[sf], f_hi[sf])
         keys = np.unique(np.concatenate([sv[a] * len(F) + b, c * len(F) + sf[d]]))
         iv, jf = np.divmod(keys, max(len(F), 1))
-        a, b = box_pairs(e_lo[se], e_hi[se], e_lo, e_hi)
+        a, b = pairs(e_lo[se], e_hi[se], e_lo, e_hi)
         a = se[a]
         keys = np.unique(np.minimum(a, b) * len(E) + np.maximum(a, b))
         ie, je = np.divmod(keys, max(len(E), 1))
@@ -314,24 +318,4 @@ def candidates_touching(mesh, lo, hi, pad, far):
 
     For a few vertices (a grid search costs the same whatever their number).
     """
-    F, E = mesh.faces, mesh.edges
-    v_lo, v_hi = lo - pad, hi + pad
-    f_lo, f_hi = v_lo[F].min(axis=1), v_hi[F].max(axis=1)
-    e_lo, e_hi = v_lo[E].min(axis=1), v_hi[E].max(axis=1)
-    sv = np.flatnonzero(far)
-    sf = np.flatnonzero(far[F].any(axis=1))
-    se = np.flatnonzero(far[E].any(axis=1))
-    a, b = _overlap_matrix(v_lo[sv], v_hi[sv], f_lo, f_hi)
-    c, d = _overlap_matrix(f_lo[sf], f_hi[sf], v_lo, v_hi)
-    keys = np.unique(np.concatenate([sv[a] * len(F) + b, d * len(F) + sf[c]]))
-    iv, jf = np.divmod(keys, max(len(F), 1))
-    a, b = _overlap_matrix(e_lo[se], e_hi[se], e_lo, e_hi)
-    a = se[a]
-    keys = np.unique(np.minimum(a, b) * len(E) + np.maximum(a, b))
-    ie, je = np.divmod(keys, max(len(E), 1))
-    keep = ie != je
-    ie, je = ie[keep], je[keep]
-    keep = ~(F[jf] == iv[:, None]).any(axis=1)
-    iv, jf = iv[keep], jf[keep]
-    keep = ~(E[ie][:, :, None] == E[je][:, None, :]).any(axis=(1, 2))
-    return iv.astype(np.int64), jf.astype(np.int64), ie[keep].astype(np.int64), je[keep].astype(np.int64)
+    return candidates_in_boxes(mesh, lo, hi, pad, far, pairs=_overlap_matrix)

@@ -14,7 +14,8 @@ What is compared
     submission shares with the stub: signature, docstring, and any statement
     of the stub's body (``raise NotImplementedError``). References: every
     function and method of the library (``particles/`` except
-    ``particles/course/``) and the masters' solutions.
+    ``particles/course/``) but those that only return a call (their shape is
+    any one-line call's), and the masters' solutions.
 
 Normalization and scoring
     :mod:`particles.course.fingerprint`: each function's body becomes a
@@ -236,6 +237,17 @@ def _submission(unit, info, path, library):
 
 
 @lru_cache(maxsize=4)
+def _delegates(func):
+    """Whether `func` only returns a call (its docstring aside): a library function that hands its work on.
+
+    Its shape, ``return g(args)``, is that of any one-line student function
+    that calls something; what it delegates to is compared in its place.
+    """
+    body = func.body[1:] if func.body and isinstance(func.body[0], ast.Expr) and \
+        isinstance(func.body[0].value, ast.Constant) and isinstance(func.body[0].value.value, str) else func.body
+    return len(body) == 1 and isinstance(body[0], ast.Return) and isinstance(body[0].value, ast.Call)
+
+
 def _library(folder):
     """The library's functions, and (its top-level defs and classes, its re-exports) for :class:`Context`."""
     folder, modules, defs, reexports = Path(folder), [], set(), {}
@@ -256,7 +268,7 @@ def _library(folder):
         while stack:  # functions and methods at any depth: a loop over scopes
             prefix, body = stack.pop()
             for node in body:
-                if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and not _delegates(node):
                     out.append(make_function(node, context, owner="library", kind="library", exercise="",
                                          name=f"{prefix}.{node.name}", path=str(rel), cell="",
                                          role="reference")[0])

@@ -15,7 +15,7 @@ import pytest
 import particles.integrators
 import particles.massspring
 from particles.cli import main
-from particles.course.similarity import fingerprint, score, similarity
+from particles.course.similarity import fingerprint, library_functions, score, similarity
 
 ROOT = Path(__file__).resolve().parents[2]
 EX01, EX00, EX02 = "01_integrator_order", "00_warmup", "02_stiffness"
@@ -363,3 +363,10 @@ def test_planted_copies_are_found_among_many_distinct_submissions(tmp_path):
     for copier, source in planted:
         found = {name for a, b, name in together if (a, b) == (copier, source)}
         assert len(found) >= 8, (copier, source, found)  # of the 9 asked functions; short ones are ignored
+
+
+def test_library_functions_that_only_delegate_are_no_references():
+    """A library function whose body is ``return g(...)`` is not compared; one with more to it is."""
+    names = {f.name for f in library_functions()}
+    assert "particles._sweep.candidates_touching" not in names  # return candidates_in_boxes(...)
+    assert "particles._sweep.candidates_in_boxes" in names and "particles.integrators.midpoint" in names
