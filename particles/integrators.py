@@ -231,12 +231,12 @@ def symplectic_euler(f, X, t, h):
     ``w h < 2`` and the energy error stays bounded (it oscillates, it does not
     drift) over arbitrarily long runs [2]_.
 
-    When `f` has a method ``fused_symplectic_euler(X, t, h)``, or is the
-    ``derivative`` of an object that has one (a
-    :class:`~particles.ParticleSystem`), and that method returns a state, the
-    step is that state: the same method in one compiled pass when the
-    system's springs run compiled (:func:`particles.backends.stepped_derivative`),
-    equal to this code to rounding.
+    When `f` is the ``derivative`` of an object with a method
+    ``fused_symplectic_euler(X, t, h)`` (a :class:`~particles.ParticleSystem`)
+    and that method returns a state, the step is that state: the same method
+    in one compiled pass when the system's springs run compiled
+    (:func:`particles.backends.compiled_step`), equal to this code to
+    rounding.
     """
     X, h = _arguments(X, t, h)
     fused = _compiled_step(f)  # a system's step in one compiled pass (particles.backends), or None
@@ -251,11 +251,9 @@ def symplectic_euler(f, X, t, h):
 
 
 def _compiled_step(f):
-    """`f`'s ``fused_symplectic_euler``, or its owner's when `f` is a bound ``derivative`` method; else None."""
-    fused = getattr(f, "fused_symplectic_euler", None)
-    if fused is None and getattr(f, "__name__", None) == "derivative":
-        fused = getattr(getattr(f, "__self__", None), "fused_symplectic_euler", None)
-    return fused
+    """The ``fused_symplectic_euler`` of `f`'s owner when `f` is a bound ``derivative`` method, else None."""
+    owner = getattr(f, "__self__", None) if getattr(f, "__name__", None) == "derivative" else None
+    return getattr(owner, "fused_symplectic_euler", None)
 
 
 @_stepper(order=2, second_order_layout=True, fsal=True)

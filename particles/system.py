@@ -21,7 +21,7 @@ References
 import numpy as np
 
 from ._checks import as_float_array, end_time, finite_real, pinned_indices, positive_number
-from .backends import stepped_derivative
+from .backends import compiled_step
 from .integrators import BLOWUP_FACTOR, integrate
 from .steppers import as_stepper
 
@@ -318,7 +318,7 @@ class ParticleSystem:
         """A symplectic Euler step from X, in one compiled pass when the springs run compiled; else None.
 
         :func:`particles.integrators.symplectic_euler` calls it when given
-        this system's :meth:`derivative` (:func:`particles.backends.stepped_derivative`).
+        this system's :meth:`derivative` (:func:`particles.backends.compiled_step`).
 
         Parameters
         ----------
@@ -333,8 +333,8 @@ class ParticleSystem:
             The new state; None when no compiled step applies (then the
             stepper takes its NumPy step).
         """
-        stepped = stepped_derivative(self)
-        return None if stepped is None else stepped.fused_symplectic_euler(X, t, h)
+        step = compiled_step(self)
+        return None if step is None else step.symplectic_euler(X, t, h)
 
     def reaction_forces(self, X=None, t=None):
         """Force each pin exerts on its particle, by inverse dynamics.
@@ -429,13 +429,10 @@ class ParticleSystem:
         next step starts from. When no force depends on the velocities
         (each says so with ``uses_velocity = False``), that force is the
         next step's first one: :class:`_ReusedForces` returns it again.
-        When the system's springs run compiled, the derivative also carries a
-        compiled symplectic Euler step, which that stepper takes instead of
-        its NumPy one (:func:`particles.backends.stepped_derivative`).
         """
         if getattr(step, "fsal", False) and not any(getattr(f, "uses_velocity", True) for f in self.forces):
             return _ReusedForces(self)
-        return stepped_derivative(self) or self.derivative  # with compiled springs: fused steps (backends)
+        return self.derivative
 
     def _stepper(self, method):
         """The stepper form of `method` (see :mod:`particles.steppers`), a solver checked to be this system's."""

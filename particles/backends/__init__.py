@@ -61,20 +61,18 @@ NumPy symplectic Euler step zeroes the force array, divides by the masses,
 clears the pins, and makes the new velocities and positions, each one more
 pass over all particles, and the per-force kernels read the state in the
 system's Fortran order, each coordinate of all particles together. When a
-system's springs run compiled, :meth:`particles.ParticleSystem.run` gives its
-stepper :func:`stepped_derivative` instead of the derivative: with
-:func:`~particles.integrators.symplectic_euler` (alone or inside a wrapper,
-Provot's constraint, a collider) a whole step is then one parallel pass
+system's springs run compiled, :func:`~particles.integrators.symplectic_euler`
+given the system's ``derivative`` (in :meth:`particles.ParticleSystem.run`,
+inside a wrapper such as Provot's constraint or a collider, or called
+directly) takes the whole step from :func:`compiled_step`, one parallel pass
 over blocks of particles (:mod:`particles.backends._step_kernels`): each
 block copies the particles its springs touch into rows ``(x, v)``, computes
 its springs, adds gravity, and updates its own particles; forces without a
 compiled role (wind, drag, bending) are added by their own ``add_to`` before.
 It agrees with the NumPy step to rounding, has the same bits on any number
-of threads, and is what ``bench/bench_backends.py`` times against Warp.
-``symplectic_euler(system.derivative, X, t, h)`` called directly takes it
-too (:meth:`particles.ParticleSystem.fused_symplectic_euler`); with the
-NumPy backend (or below :data:`AUTO_MIN` particles on ``"auto"``) the step
-is the slide's, bit for bit.
+of threads, and is what ``bench/bench_backends.py`` times against Warp. With
+the NumPy backend (or below :data:`AUTO_MIN` particles on ``"auto"``) the
+step is the slide's, bit for bit.
 
 **Why numba.** It compiles plain Python loops over NumPy arrays, so the
 kernel reads as the slide's loop, with the same names; it ships as wheels
@@ -110,7 +108,7 @@ import os
 import warnings
 
 __all__ = ["BACKENDS", "AUTO_MIN", "available", "check_backend", "resolve", "set_backend", "get_backend",
-           "using", "kernels_for", "stepped_derivative"]
+           "using", "kernels_for", "compiled_step"]
 
 BACKENDS = ("auto", "numpy", "numba")
 
@@ -233,30 +231,29 @@ def kernels_for(backend, size):
     return compiled
 
 
-def stepped_derivative(system):
-    """`system`'s derivative, able to take compiled symplectic Euler steps when its springs run compiled; or None.
+def compiled_step(system):
+    """`system`'s compiled symplectic Euler step when its springs run compiled, or None.
 
-    :meth:`particles.ParticleSystem.run` hands this to its stepper instead of
-    ``system.derivative`` when it is not None: with the stepper
-    :func:`~particles.integrators.symplectic_euler` (also inside wrappers
-    such as Provot's or the colliders'), a whole step is then one compiled
-    pass (:class:`particles.backends.compiled.SteppedDerivative`); any other
-    stepper just calls it as the derivative.
+    :meth:`particles.ParticleSystem.fused_symplectic_euler` calls it at each
+    step: :func:`~particles.integrators.symplectic_euler` given the system's
+    ``derivative`` (by :meth:`particles.ParticleSystem.run`, by a wrapper such
+    as Provot's or a collider, or directly) then takes the whole step in one
+    compiled pass (:class:`particles.backends.compiled.CompiledStep`).
 
     Returns
     -------
-    SteppedDerivative or None
+    CompiledStep or None
         None unless the system has one to three
         :class:`~particles.springs.Springs` sets (``compiled_role ==
         "springs"``), in 2D or 3D, and all of them resolve to numba for the
-        system's size.
+        system's size. Nothing imports numba otherwise.
     """
     springs = [f for f in system.forces if getattr(f, "compiled_role", None) == "springs"]
     if not springs or not _all_compiled(springs, system.n):
         return None
-    from .compiled import SteppedDerivative  # noqa: PLC0415  (loaded by _all_compiled already)
-    derivative = SteppedDerivative(system, _all_compiled)
-    return derivative if derivative.parts(system.n) is not None else None
+    from .compiled import CompiledStep  # noqa: PLC0415  (loaded by _all_compiled already)
+    step = CompiledStep(system, _all_compiled)
+    return step if step.parts(system.n) is not None else None
 
 
 def _all_compiled(forces, n):

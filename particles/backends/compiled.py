@@ -19,7 +19,7 @@ from ._kernels import nbody as nbody_sums
 from ._pbd_kernels import distance_group, distance_jacobi
 from ._step_kernels import symplectic_euler_blocks
 
-__all__ = ["springs", "bending", "lennard_jones", "nbody", "distance_project", "SteppedDerivative"]
+__all__ = ["springs", "bending", "lennard_jones", "nbody", "distance_project", "CompiledStep"]
 
 
 def _store(owner):
@@ -166,7 +166,7 @@ def _per_spring(a, s):
 
 
 def _count_alone():
-    """The reference count of an object held by a list only, read as :meth:`SteppedDerivative._new_state` reads it."""
+    """The reference count of an object held by a list only, read as :meth:`CompiledStep._new_state` reads it."""
     for probe in [object()]:  # the same holders: the list, the loop variable, the call's argument
         return sys.getrefcount(probe)
 
@@ -177,14 +177,11 @@ _ALONE = _count_alone()
 STEP_BLOCK = 2048
 
 
-class SteppedDerivative:
-    """A system's derivative that also takes whole symplectic Euler steps in one compiled pass.
+class CompiledStep:
+    """A system's symplectic Euler step in one compiled pass (:func:`particles.backends.compiled_step`).
 
-    Called as ``f(X, t)``, it is :meth:`particles.ParticleSystem.derivative`.
-    :func:`particles.integrators.symplectic_euler` finds its
-    :meth:`fused_symplectic_euler` and calls it first: a step of the same
-    method in one parallel pass over blocks of particles
-    (:mod:`particles.backends._step_kernels`), the springs
+    :meth:`symplectic_euler` takes the step in one parallel pass over blocks
+    of particles (:mod:`particles.backends._step_kernels`): the springs
     (:class:`~particles.springs.Springs`, up to three sets) and the update of
     every particle compiled, uniform gravity folded into the update, every
     other force added by its own ``add_to`` as in
@@ -198,9 +195,6 @@ class SteppedDerivative:
         self.system = system
         self.compiled = compiled  # compiled(forces, n): whether all these forces run compiled for n particles
         self._spare = _store(system).setdefault("spare", [])  # earlier new states, reused once nobody holds them
-
-    def __call__(self, X, t):
-        return self.system.derivative(X, t)
 
     def parts(self, n):
         """The spring sets, the summed gravity and the other forces; None when the step does not apply.
@@ -294,7 +288,7 @@ class SteppedDerivative:
         self._spare[:] = [out] + self._spare[:1]
         return out
 
-    def fused_symplectic_euler(self, X, t, h):
+    def symplectic_euler(self, X, t, h):
         """One symplectic Euler step from X (n, 2, d) at t by h, compiled; None when it does not apply.
 
         It does not apply (and the caller takes the NumPy step) when X is not

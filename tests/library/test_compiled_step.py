@@ -1,8 +1,8 @@
-"""The compiled symplectic Euler step of a mass-spring system (particles.backends.compiled.SteppedDerivative).
+"""The compiled symplectic Euler step of a mass-spring system (particles.backends.compiled.CompiledStep).
 
-With the springs on numba, :meth:`ParticleSystem.run` hands its stepper a
-derivative that also takes whole symplectic Euler steps in one compiled
-pass. These tests compare its runs with the NumPy runs (1e-12 relative) on
+With the springs on numba, symplectic Euler given a system's derivative (in
+:meth:`ParticleSystem.run`, in a wrapper, or directly) takes the whole step
+in one compiled pass. These tests compare its runs with the NumPy runs (1e-12 relative) on
 cloths, strings and hair, with every kind of force beside the springs, with
 blocks small enough that springs cross several of them, and check that it
 follows what the user changes between steps (stiffness in place, pins,
@@ -85,25 +85,24 @@ def test_blocks_smaller_than_a_spring_agree(block, monkeypatch):
     _close(reference, compiled_run)
 
 
-def test_the_run_takes_the_compiled_step_and_numpy_does_not():
-    """With numba the run's derivative carries the compiled step, symplectic_euler takes it (also given
-    system.derivative); with NumPy, neither."""
+def test_symplectic_euler_takes_the_compiled_step_and_numpy_does_not():
+    """With numba, symplectic_euler given the system's derivative takes the compiled step; with NumPy, not."""
     system = _shaken(cloth(8, 8, kd=0.05))
     with backends.using("numpy"):
-        assert backends.stepped_derivative(system) is None
-        assert system._rhs(symplectic_euler) == system.derivative
+        assert backends.compiled_step(system) is None
+    X = system.state()
+    given = X.copy()
     with backends.using("numba"):
-        f = backends.stepped_derivative(system)
-        X = system.state()
-        fused = f.fused_symplectic_euler(X, 0.0, H)
-        np.testing.assert_array_equal(symplectic_euler(f, X, 0.0, H), fused)
-        np.testing.assert_array_equal(f(X, 0.0), system.derivative(X, 0.0))  # and it is the derivative
-        np.testing.assert_array_equal(symplectic_euler(system.derivative, X, 0.0, H), fused)  # called directly too
+        fused = backends.compiled_step(system).symplectic_euler(X, 0.0, H)
+        np.testing.assert_array_equal(system.fused_symplectic_euler(X, 0.0, H), fused)
+        np.testing.assert_array_equal(symplectic_euler(system.derivative, X, 0.0, H), fused)
+        t, states = system.run(H, H, method="symplectic_euler")  # the run's step too
+        np.testing.assert_array_equal(states[-1], fused)
     with backends.using("numpy"):
         reference = symplectic_euler(system.derivative, X, 0.0, H)
         assert system.fused_symplectic_euler(X, 0.0, H) is None
     _close(reference, fused)
-    np.testing.assert_array_equal(X, system.state())  # the state given is not modified
+    np.testing.assert_array_equal(X, given)  # the state given is not modified
 
 
 def test_the_same_bits_on_one_thread_and_on_two(monkeypatch):
@@ -122,7 +121,7 @@ def test_the_same_bits_on_one_thread_and_on_two(monkeypatch):
             monkeypatch.setattr(_kernels, "PARALLEL_MIN", parallel_min)  # 0: the parallel kernel; 10**9: serial
             numba.set_num_threads(threads)
             with backends.using("numba"):
-                results.append(backends.stepped_derivative(system).fused_symplectic_euler(X, 0.0, H))
+                results.append(backends.compiled_step(system).symplectic_euler(X, 0.0, H))
     finally:
         numba.set_num_threads(before)
     for other in results[1:]:
@@ -187,8 +186,8 @@ def test_where_it_does_not_apply_the_numpy_step_is_taken():
     assert subclassed().forces[0].compiled_role is None and string(3).forces[0].compiled_role == "springs"
     for make in (subclassed, four_sets):
         with backends.using("numba"):
-            f = backends.stepped_derivative(make())
-            assert f is None or f.fused_symplectic_euler(f.system.state(), 0.0, H) is None
+            system = make()
+            assert system.fused_symplectic_euler(system.state(), 0.0, H) is None
         _close(*_runs(make))
     _close(*_runs(lambda: cloth(8, 8, kd=0.05), method="verlet"))  # verlet calls it as the derivative
 
@@ -215,14 +214,14 @@ def test_a_state_still_held_is_never_reused():
     system = _shaken(cloth(8, 8, kd=0.05))
     X = system.state()
     with backends.using("numba"):
-        f = backends.stepped_derivative(system)
-        first = f.fused_symplectic_euler(X, 0.0, H)
+        f = backends.compiled_step(system)
+        first = f.symplectic_euler(X, 0.0, H)
         kept = first.copy()
-        view = f.fused_symplectic_euler(X, 0.0, 2 * H)[:, 0]  # only a view of the second is held
-        third = f.fused_symplectic_euler(X, 0.0, 3 * H)
+        view = f.symplectic_euler(X, 0.0, 2 * H)[:, 0]  # only a view of the second is held
+        third = f.symplectic_euler(X, 0.0, 3 * H)
         assert not np.shares_memory(third, first) and not np.shares_memory(third, view)
         np.testing.assert_array_equal(first, kept)
         _close(view, symplectic_euler(system.derivative, X, 0.0, 2 * H)[:, 0])
         del first, view
-        again = f.fused_symplectic_euler(X, 0.0, H)
+        again = f.symplectic_euler(X, 0.0, H)
         np.testing.assert_array_equal(again, kept)
