@@ -242,7 +242,7 @@ def test_prefactored_refactorizes_for_a_new_step():
 
 @pytest.mark.parametrize("pin", ["top", "both"])
 def test_relax_converges_on_a_stiff_chain_with_its_defaults(pin):
-    """Issue 13: an 81-node chain with EA = 1e5 N relaxes with the default tol (the tensions set the force scale)."""
+    """Issue 13: an 81-node chain with EA = 1e5 N relaxes with the default tol (each node's weight sets it)."""
     s = string(81, 1.0, pin=pin, span=0.8 if pin == "both" else None, scaling="physical", linear_density=0.2,
                stretch_modulus=1e5)
     relax(s)
