@@ -246,10 +246,18 @@ class XPBD:
         al. (2019) treat contacts; or wrap the whole stepper with
         :meth:`~particles.collisions.Collider.stepper`.
     backend : {None, "auto", "numpy", "numba"}, optional
-        Who projects the distance constraints: the NumPy code of
-        :meth:`Distance.project`, or the same projections compiled, one
-        colour group at a time (see :mod:`particles.backends`; None: the
-        global choice). Other constraint sets always use NumPy.
+        The NumPy code of :meth:`Distance.project` and the other sets'
+        ``project``, or the same projections compiled (see
+        :mod:`particles.backends`; None: the global choice). Compiled, a
+        Gauss-Seidel substep is one call
+        (:class:`particles.backends.xpbdstep.CompiledSubstep`): the
+        prediction, every set's colour groups (distance, bending, clamps,
+        attachments; each group's rows in parallel) and the new velocities,
+        with uniform gravity folded in (other forces evaluated in NumPy
+        first); the same bits as NumPy on any number of threads. Jacobi, and
+        a set of a kind without a compiled form (a subclass with its own
+        ``project``), keep the per-pass path: distance passes compiled one
+        at a time, other sets in NumPy.
 
     Attributes
     ----------
@@ -389,22 +397,66 @@ class XPBD:
         x = np.ascontiguousarray(X[:, 0].T)  # coordinate-major (d, n): every operation runs over particles
         v = np.ascontiguousarray(X[:, 1].T)
         v[:, self.pinned] = 0.0
+        fused = self._compiled(len(x))
+        if fused is not None:  # the whole substep in one compiled call (particles.backends.xpbdstep)
+            G = self._gravity(len(x))
+            d_lam, l_lam, lams = fused.multipliers()
         for s in range(self.substeps):  # a loop over substeps
             ts = t + s * hs
-            v += hs * self._accelerations(f, x, v, ts)
-            x_n = x.copy()
-            x += hs * v
-            lams = self._solve(x, x_n, hs)
-            v = (x - x_n) / hs
+            if fused is not None:
+                a = None if G is not None else self._accelerations(f, x, v, ts)
+                fused.substep(x, v, a, G if G is not None else np.zeros((0, len(x))), hs, self.iterations,
+                              (d_lam, l_lam))
+            else:
+                v += hs * self._accelerations(f, x, v, ts)
+                x_n = x.copy()
+                x += hs * v
+                lams = self._solve(x, x_n, hs)
+                v = (x - x_n) / hs
             if self.collider is not None:
                 xc, vc, _ = self.collider.resolve(x.T, v.T, self.m, self.pinned, ts + hs)
                 x, v = np.ascontiguousarray(xc.T), np.ascontiguousarray(vc.T)
         self._keep_multipliers(lams)
-        self.violation.append(max([float(np.max(np.abs(c.values(x.T)), initial=0.0))
-                                   for c in self._sets if isinstance(c, Distance)], default=0.0))
+        if fused is not None:
+            self.violation.append(fused.violation(x))
+        else:
+            self.violation.append(max([float(np.max(np.abs(c.values(x.T)), initial=0.0))
+                                       for c in self._sets if isinstance(c, Distance)], default=0.0))
         X_new = np.empty_like(X)
         X_new[:, 0], X_new[:, 1] = x.T, v.T
         return X_new
+
+    def _compiled(self, d):
+        """The compiled substep for positions in `d` dimensions, or None (NumPy or per-colour calls).
+
+        It applies with the Gauss-Seidel method, the backend resolving to numba
+        for this many particles, and every set of a compiled form (distance or
+        linear, :attr:`~particles.pbdconstraints.Distance.compiled_form`); kept
+        until the batches are rebuilt (:meth:`set_stiffness`).
+        """
+        if self.method != "gauss-seidel" or kernels_for(self._backend, self.n) is None:
+            return None
+        kept = self.__dict__.get("_fused")
+        if kept is not None and kept[0] is self._batches and kept[1] == d:
+            return kept[2]
+        from .backends.xpbdstep import CompiledSubstep  # noqa: PLC0415  (imports numba)
+
+        fused = None
+        if CompiledSubstep.applies(self._sets, self._batches, d):
+            fused = CompiledSubstep(self._sets, self._batches, self.m, self.pinned, self.formulation, d)
+        self._fused = (self._batches, d, fused)
+        return fused
+
+    def _gravity(self, d):
+        """The solver's forces as uniform gravities, shape (q, d), when they are nothing else; else None."""
+        if self.forces is None:
+            return None
+        G = []
+        for force in self.forces:  # a loop over the few force objects
+            if getattr(force, "compiled_role", None) != "gravity" or np.shape(force.g) != (d,):
+                return None
+            G.append(force.g)
+        return np.array(G, dtype=float).reshape(-1, d)
 
     def _solve(self, x, x_n, hs):
         """The constraint iterations of one substep, on x (d, n) in place; returns the multipliers."""
