@@ -23,7 +23,24 @@ the target plus 5%:
 Wall times are the best of one run each (a shared machine: read the ratios,
 measured in the same run). The load average is printed before and after.
 
-Run:  python bench/bench_constraints.py [--quick]    (--quick: 32^2)
+First, the XPBD substep itself (issue 24's acceptance: compiled at 128^2 at
+least 8x the NumPy solver), NumPy against the compiled substep
+(:class:`particles.backends.xpbdstep.CompiledSubstep`: one compiled call per
+substep), both as ``XPBD.from_system(..., backend=...)``, Gauss-Seidel, one
+iteration: a step of one substep (the violation measured at its end
+included), and a step of 10 substeps divided by 10, on
+
+* the cloth of ``bench_backends.py`` part 3 (128^2, damped springs kd = 0.05
+  kg/s, gravity, two pinned corners, a perturbed moving state);
+* the same with isometric bending (``bending_modulus`` 1e-4 N m, physical
+  scaling): 97k distance and 32k bending constraints;
+* the lectures' cloth with air damping (physical scaling, ``damping=0.05``):
+  the damping force folded into the compiled prediction.
+
+Times are the best of several calls in three rounds, NumPy and compiled
+alternating; "1 thread" is the compiled substep with numba on one thread.
+
+Run:  python bench/bench_constraints.py [--quick] [--substep-only]    (--quick: 32^2, substeps at 64^2)
 """
 
 import argparse
@@ -39,7 +56,9 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from particles import ConvergenceError  # noqa: E402
+from _timing import best_time  # noqa: E402
+
+from particles import ConvergenceError, backends  # noqa: E402
 from particles.constraints import ProvotConstraint  # noqa: E402
 from particles.implicit import BaraffWitkin, Prefactored  # noqa: E402
 from particles.integrators import symplectic_euler  # noqa: E402
@@ -128,10 +147,66 @@ def xpbd(n, target, log, search=0.25):
             "strain": strain}
 
 
+def substep_cases(n):
+    """The cloths of the substep table: name -> (system, state)."""
+    rng = np.random.default_rng(0)
+
+    def moving(c):
+        X = c.state()
+        free = np.setdiff1d(np.arange(c.n), c.pinned)
+        X[free, 0] += rng.normal(scale=0.05 / n, size=(len(free), 3))
+        X[free, 1] = rng.normal(scale=0.1, size=(len(free), 3))
+        return c, np.asfortranarray(X)
+
+    return {"damped springs, gravity": moving(cloth(n, n, kd=0.05)),
+            "+ isometric bending": moving(cloth(n, n, kd=0.05, scaling="physical", bending_modulus=1e-4)),
+            "air damping": moving(cloth(n, n, scaling="physical", damping=0.05))}
+
+
+def xpbd_substeps(n, rounds=3):
+    """NumPy and compiled XPBD substeps on the cloths of substep_cases: a table in ms, and the ratios."""
+    if "numba" not in backends.available():
+        print("  (numba is not installed: no compiled substep to time)")
+        return
+    import numba
+
+    import particles.backends.compiled  # noqa: F401  (before numba starts its threads: it picks their pool)
+
+    threads = numba.get_num_threads()
+    print(f"XPBD substep at {n}^2, Gauss-Seidel, 1 iteration (numba {numba.__version__}, {threads} threads, "
+          f"load average {os.getloadavg()[0]:.2f}), ms")
+    print(f"{'cloth':>27} {'constraints':>11} {'substeps':>8} {'numpy':>8} {'compiled':>9} {'1 thread':>9} "
+          f"{'np/compiled':>12}")
+    for name, (c, X) in substep_cases(n).items():
+        for substeps, h in ((1, 1 / 600), (10, 1 / 60)):
+            solvers = {be: XPBD.from_system(c, substeps=substeps, iterations=1, backend=be)
+                       for be in ("numpy", "numba")}
+            out = {be: s(None, X, 0.0, h) for be, s in solvers.items()}  # compiles, checks
+            assert np.abs(out["numpy"] - out["numba"]).max() <= 1e-12 * np.abs(out["numpy"]).max(), name
+            best = {}
+            for _ in range(rounds):  # rounds, NumPy and compiled alternating, the best of each kept
+                for key, be in (("numpy", "numpy"), ("numba", "numba"), ("1 thread", "numba")):
+                    before = numba.get_num_threads()
+                    numba.set_num_threads(1 if key == "1 thread" else before)
+                    try:
+                        t = best_time(lambda: solvers[be](None, X, 0.0, h), repeat=10 if substeps == 1 else 3)
+                    finally:
+                        numba.set_num_threads(before)
+                    best[key] = min(best.get(key, np.inf), t / substeps)
+            count = sum(len(k) for k in solvers["numba"].constraints)
+            print(f"{name:>27} {count:>11} {substeps:>8} {1e3 * best['numpy']:>8.2f} {1e3 * best['numba']:>9.2f} "
+                  f"{1e3 * best['1 thread']:>9.2f} {best['numpy'] / best['numba']:>11.1f}x")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="a 32^2 cloth")
+    parser.add_argument("--quick", action="store_true", help="a 32^2 cloth (substeps at 64^2)")
+    parser.add_argument("--substep-only", action="store_true", help="only the XPBD substep table")
     args = parser.parse_args(argv)
+    xpbd_substeps(64 if args.quick else 128)
+    if args.substep_only:
+        return
+    print()
     n = 32 if args.quick else 64
     load = os.getloadavg()[0]
     print(f"Simulate {T:g} s of a stiff {n}^2 cloth at equal largest strain; load average before: {load:.2f}")

@@ -253,8 +253,8 @@ class XPBD:
         (:class:`particles.backends.xpbdstep.CompiledSubstep`): the
         prediction, every set's colour groups (distance, bending, clamps,
         attachments; each group's rows in parallel) and the new velocities,
-        with uniform gravity folded in (other forces evaluated in NumPy
-        first); the same bits as NumPy on any number of threads. Jacobi, and
+        with uniform gravity and damping folded in (other forces evaluated in
+        NumPy first); the same bits as NumPy on any number of threads. Jacobi, and
         a set of a kind without a compiled form (a subclass with its own
         ``project``), keep the per-pass path: distance passes compiled one
         at a time, other sets in NumPy.
@@ -337,7 +337,7 @@ class XPBD:
             sets, self._orders = map(list, zip(*[s.by_colour(n) for s in sets])) if sets else ([], [])
         self._sets = sets
         self._batches = [s.batches(self.w, method) for s in self._sets]
-        self.multipliers = [c.new_multipliers(0) for c in constraints]
+        self._multipliers, self._last = [c.new_multipliers(0) for c in constraints], None
         self.violation = []
 
     @property
@@ -399,14 +399,15 @@ class XPBD:
         v[:, self.pinned] = 0.0
         fused = self._compiled(len(x))
         if fused is not None:  # the whole substep in one compiled call (particles.backends.xpbdstep)
-            G = self._gravity(len(x))
+            terms = None if self.forces is None else fused.force_terms(self.forces, len(x))
             d_lam, l_lam, lams = fused.multipliers()
         for s in range(self.substeps):  # a loop over substeps
             ts = t + s * hs
             if fused is not None:
-                a = None if G is not None else self._accelerations(f, x, v, ts)
-                fused.substep(x, v, a, G if G is not None else np.zeros((0, len(x))), hs, self.iterations,
-                              (d_lam, l_lam))
+                a = None if terms is not None else self._accelerations(f, x, v, ts)
+                last = s == self.substeps - 1 and self.collider is None  # then the call measures the violation
+                violation = fused.substep(x, v, a, terms if terms is not None else np.zeros((0, 4)), hs,
+                                          self.iterations, (d_lam, l_lam), measure=last)
             else:
                 v += hs * self._accelerations(f, x, v, ts)
                 x_n = x.copy()
@@ -418,7 +419,7 @@ class XPBD:
                 x, v = np.ascontiguousarray(xc.T), np.ascontiguousarray(vc.T)
         self._keep_multipliers(lams)
         if fused is not None:
-            self.violation.append(fused.violation(x))
+            self.violation.append(violation if self.collider is None else fused.violation(x))
         else:
             self.violation.append(max([float(np.max(np.abs(c.values(x.T)), initial=0.0))
                                        for c in self._sets if isinstance(c, Distance)], default=0.0))
@@ -443,20 +444,9 @@ class XPBD:
 
         fused = None
         if CompiledSubstep.applies(self._sets, self._batches, d):
-            fused = CompiledSubstep(self._sets, self._batches, self.m, self.pinned, self.formulation, d)
+            fused = CompiledSubstep(self._sets, self._batches, self.m, self.w, self.formulation, d)
         self._fused = (self._batches, d, fused)
         return fused
-
-    def _gravity(self, d):
-        """The solver's forces as uniform gravities, shape (q, d), when they are nothing else; else None."""
-        if self.forces is None:
-            return None
-        G = []
-        for force in self.forces:  # a loop over the few force objects
-            if getattr(force, "compiled_role", None) != "gravity" or np.shape(force.g) != (d,):
-                return None
-            G.append(force.g)
-        return np.array(G, dtype=float).reshape(-1, d)
 
     def _solve(self, x, x_n, hs):
         """The constraint iterations of one substep, on x (d, n) in place; returns the multipliers."""
@@ -471,7 +461,23 @@ class XPBD:
                     s.project(b, x, x_n, lam, hs, self.formulation)
         return lams
 
+    @property
+    def multipliers(self):
+        """Lagrange multipliers of each set at the end of the last substep (see the class notes).
+
+        Put back in the order the sets and their rows were given when first
+        read after a step (a scatter as long as the constraints, which a run
+        that never reads them does not pay at every step).
+        """
+        if self._last is not None:
+            self._multipliers, self._last = self._unsorted_multipliers(self._last), None
+        return self._multipliers
+
     def _keep_multipliers(self, lams):
+        """Keep the last substep's multipliers (per solver set, colour-sorted) for :attr:`multipliers`."""
+        self._last = lams
+
+    def _unsorted_multipliers(self, lams):
         """Multipliers per set, in the order the sets and their rows were given (distances split again)."""
         unsorted = []
         for lam, order in zip(lams, self._orders):  # a loop over the few sets: undo the colour sort
@@ -485,7 +491,7 @@ class XPBD:
             ends = np.cumsum([len(self.constraints[k]) for k in sources])[:-1]
             for k, part in zip(sources, np.split(lam, ends, axis=-1)):
                 multipliers[k] = part
-        self.multipliers = multipliers
+        return multipliers
 
     def set_stiffness(self, stiffness):
         """Set every constraint's PBD stiffness (in [0, 1]) and rebuild the batches; returns self."""

@@ -84,17 +84,24 @@ def distance_jacobi(x, x_n, lam, i, j, L0, wi, wj, at, inv, gamma, scale, xpbd, 
 
 
 @_jit(parallel=True)
-def substep(x, v, x_n, a, given, G, m, free, hs, iterations, xpbd, segments,
-            i, j, L0, wi, wj, d_at, d_inv, d_gamma, d_lam,
-            idx, c, wc, offset, l_at, l_inv, l_gamma, l_lam):
-    """One XPBD substep of length hs in one call, in place on x, v (d, n); x_n receives the predicted-from x.
+def substep(x, v, a, given, terms, m, free, hs, iterations, xpbd, segments, P,
+            ij, dco, d_lam, idx, c, wc, offset, lco, l_lam, measure, violation):
+    """One XPBD substep of length hs in one call, in place on x and v (d, n).
 
     Prediction ``v += hs a``, ``x_n = x``, ``x += hs v`` (``a``: the given
-    accelerations, else ``sum_q G_q m / m``, 0 at pinned particles), the
-    multipliers set to zero, ``iterations`` sweeps through the ``segments``
-    (rows ``(form, start, stop, width, damped)``: form 0 distance rows
-    ``start:stop``, form 1 linear rows; each segment one colour group, its
-    rows in parallel), then ``v = (x - x_n) / hs``.
+    accelerations, else ``F / m`` from the force ``terms`` (q, 4), rows
+    ``(0, g)`` for gravity, ``(1, d)`` for damping ``-d v``, ``(2, rate)``
+    for ``-rate m v``; 0 at pinned particles) into the
+    particle rows ``P`` (n, 8): ``x`` in columns 0-2, ``x_n`` in 3-5, the
+    inverse mass ``w`` in 6 (kept there by the caller), so that a
+    constraint reads one cache line per particle. Then the multipliers set to
+    zero, ``iterations`` sweeps through the ``segments`` (rows ``(form, start,
+    stop, width, damped)``, each one colour group: form 0 distance rows of
+    ``ij`` and ``dco`` = (L0, alpha~, 1 / denominator, gamma), form 1 linear
+    rows of ``idx``, ``c``, ``wc`` = w c, ``offset`` and ``lco`` = (alpha~,
+    1 / denominator, gamma); a group's rows in parallel), ``v = (x - x_n) /
+    hs`` and x written back; with `measure`, ``violation[r] = |C_r|`` of
+    every distance row at the new positions.
     """
     dim, n = x.shape
     three = dim == 3
@@ -102,14 +109,20 @@ def substep(x, v, x_n, a, given, G, m, free, hs, iterations, xpbd, segments,
         for p in prange(n):
             if given:
                 acc = a[e, p]
-            else:
+            else:  # the forces' add_to in their order, then F / m (the NumPy solver's _accelerations)
                 F = 0.0
-                for q in range(G.shape[0]):
-                    F += G[q, e] * m[p]
+                for q in range(terms.shape[0]):
+                    if terms[q, 0] == 0.0:  # gravity g: F += g m
+                        F += terms[q, 1 + e] * m[p]
+                    elif terms[q, 0] == 1.0:  # damping d: F -= d v
+                        F -= terms[q, 1] * v[e, p]
+                    else:  # damping per unit mass: F -= (rate m) v
+                        F -= (terms[q, 1] * m[p]) * v[e, p]
                 acc = F / m[p] if free[p] else 0.0
-            v[e, p] += hs * acc
-            x_n[e, p] = x[e, p]
-            x[e, p] += hs * v[e, p]
+            vp = v[e, p] + hs * acc
+            v[e, p] = vp
+            P[p, 3 + e] = x[e, p]
+            P[p, e] = x[e, p] + hs * vp
     for r in prange(len(d_lam)):
         d_lam[r] = 0.0
     for r in prange(l_lam.shape[1]):
@@ -121,68 +134,77 @@ def substep(x, v, x_n, a, given, G, m, free, hs, iterations, xpbd, segments,
                 segments[s, 4] != 0
             if form == 0:  # distance rows: the arithmetic of distance_group
                 for r in prange(start, stop):
-                    a, b = i[r], j[r]
-                    d0 = x[0, a] - x[0, b]
-                    d1 = x[1, a] - x[1, b]
-                    d2 = x[2, a] - x[2, b] if three else 0.0
+                    pa, pb = ij[r, 0], ij[r, 1]
+                    d0 = P[pa, 0] - P[pb, 0]
+                    d1 = P[pa, 1] - P[pb, 1]
+                    d2 = P[pa, 2] - P[pb, 2] if three else 0.0
                     L = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
                     Lg = max(L, 1e-150)
                     lr = d_lam[r]
                     if xpbd and not damped:
-                        dl = (L0[r] - L - d_at[r] * lr) * d_inv[r]
+                        dl = (dco[r, 0] - L - dco[r, 1] * lr) * dco[r, 2]
                     elif xpbd:
-                        rel = d0 * (d0 - (x_n[0, a] - x_n[0, b])) + d1 * (d1 - (x_n[1, a] - x_n[1, b]))
+                        rel = d0 * (d0 - (P[pa, 3] - P[pb, 3])) + d1 * (d1 - (P[pa, 4] - P[pb, 4]))
                         if three:
-                            rel += d2 * (d2 - (x_n[2, a] - x_n[2, b]))
-                        dl = (-(L - L0[r]) - d_at[r] * lr - d_gamma[r] * (rel / Lg)) * d_inv[r]
+                            rel += d2 * (d2 - (P[pa, 5] - P[pb, 5]))
+                        dl = (-(L - dco[r, 0]) - dco[r, 1] * lr - dco[r, 3] * (rel / Lg)) * dco[r, 2]
                     else:
-                        dl = -(L - L0[r]) * d_inv[r]
+                        dl = -(L - dco[r, 0]) * dco[r, 2]
                     if xpbd:
                         d_lam[r] = lr + dl
                     scale = dl / Lg
+                    wa, wb = P[pa, 6], P[pb, 6]
                     d0 *= scale
                     d1 *= scale
-                    x[0, a] += wi[r] * d0
-                    x[0, b] -= wj[r] * d0
-                    x[1, a] += wi[r] * d1
-                    x[1, b] -= wj[r] * d1
+                    P[pa, 0] += wa * d0
+                    P[pb, 0] -= wb * d0
+                    P[pa, 1] += wa * d1
+                    P[pb, 1] -= wb * d1
                     if three:
                         d2 *= scale
-                        x[2, a] += wi[r] * d2
-                        x[2, b] -= wj[r] * d2
+                        P[pa, 2] += wa * d2
+                        P[pb, 2] -= wb * d2
             else:  # linear rows, C = sum_k c_k x_{idx_k} - offset, each coordinate on its own
                 for r in prange(start, stop):
                     for e in range(dim):
                         C = 0.0
                         for k in range(width):
-                            C += c[r, k] * x[e, idx[r, k]]
+                            C += c[r, k] * P[idx[r, k], e]
                         C -= offset[r, e]
                         lr = l_lam[e, r]
                         if xpbd:
-                            res = -C - l_at[r] * lr
+                            res = -C - lco[r, 0] * lr
                             if damped:
                                 Cn = 0.0
                                 for k in range(width):
-                                    Cn += c[r, k] * x_n[e, idx[r, k]]
-                                res -= l_gamma[r] * (C + offset[r, e] - Cn)  # gamma (C(x) - C(x_n))
-                            dl = res * l_inv[r]
+                                    Cn += c[r, k] * P[idx[r, k], 3 + e]
+                                res -= lco[r, 2] * (C + offset[r, e] - Cn)  # gamma (C(x) - C(x_n))
+                            dl = res * lco[r, 1]
                             l_lam[e, r] = lr + dl
                         else:
-                            dl = -C * l_inv[r]
+                            dl = -C * lco[r, 1]
                         for k in range(width):
-                            x[e, idx[r, k]] += wc[r, k] * dl
+                            P[idx[r, k], e] += wc[r, k] * dl
     for e in range(dim):
         for p in prange(n):
-            v[e, p] = (x[e, p] - x_n[e, p]) / hs
+            x[e, p] = P[p, e]
+            v[e, p] = (P[p, e] - P[p, 3 + e]) / hs
+    if measure:
+        for r in prange(len(violation)):
+            pa, pb = ij[r, 0], ij[r, 1]
+            d0 = P[pa, 0] - P[pb, 0]
+            d1 = P[pa, 1] - P[pb, 1]
+            d2 = P[pa, 2] - P[pb, 2] if three else 0.0
+            violation[r] = abs(math.sqrt(d0 * d0 + d1 * d1 + d2 * d2) - dco[r, 0])
 
 
 @_jit(parallel=True)
-def distance_violation(x, i, j, L0, out):
-    """``|C| = ||x_i - x_j| - L0|`` of every distance constraint into out (s,)."""
+def distance_violation(x, ij, dco, out):
+    """``|C| = ||x_i - x_j| - L0|`` of every distance row (ij, L0 = dco[:, 0]) into out (s,), at x (d, n)."""
     three = x.shape[0] == 3
-    for r in prange(len(i)):
-        a, b = i[r], j[r]
+    for r in prange(len(out)):
+        a, b = ij[r, 0], ij[r, 1]
         d0 = x[0, a] - x[0, b]
         d1 = x[1, a] - x[1, b]
         d2 = x[2, a] - x[2, b] if three else 0.0
-        out[r] = abs(math.sqrt(d0 * d0 + d1 * d1 + d2 * d2) - L0[r])
+        out[r] = abs(math.sqrt(d0 * d0 + d1 * d1 + d2 * d2) - dco[r, 0])

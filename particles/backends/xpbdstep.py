@@ -15,9 +15,9 @@ and a table of segments ``(form, start, stop, width, damped)``, one per
 colour group in sweep order. The coefficients ``alpha / hs^2``, ``1 /
 ((1 + gamma) W + alpha / hs^2)`` and ``gamma`` are the batches' own
 (:meth:`particles.pbdconstraints._ConstraintSet._coefficients`), gathered again when
-``hs`` changes. Uniform gravity is folded into the prediction; any other
-external force is evaluated by the solver in NumPy and passed in as
-accelerations.
+``hs`` changes. Uniform gravity and damping are folded into the prediction
+(:meth:`CompiledSubstep.force_terms`); any other external force is
+evaluated by the solver in NumPy and passed in as accelerations.
 
 Every projection does the NumPy code's operations in the same order, so a
 substep gives the same bits as the NumPy solver's (tested to 1e-12), on any
@@ -51,8 +51,8 @@ class CompiledSubstep:
         Each set's colour groups as the solver built them (``set.batches(w, "gauss-seidel")``).
     m : ndarray, shape (n,)
         Masses, in kg.
-    pinned : ndarray of int
-        Pinned particles (inverse mass 0).
+    w : ndarray, shape (n,)
+        Inverse masses, 0 at pinned particles (those the prediction leaves at rest).
     formulation : {"xpbd", "pbd"}
     d : int
         Dimension, 2 or 3.
@@ -60,27 +60,39 @@ class CompiledSubstep:
     Use :meth:`applies` first: it says whether every set has a compiled form.
     """
 
-    def __init__(self, sets, batches, m, pinned, formulation, d):
+    def __init__(self, sets, batches, m, w, formulation, d):
         self.sets = sets
         self.batches = batches  # the solver's list: rebuilt batches (set_stiffness) mean a new layout
         self.formulation = formulation
         self.n, self.d = len(m), d
         self.m = np.ascontiguousarray(m, dtype=np.float64)
-        self.free = np.ones(self.n, dtype=np.bool_)
-        self.free[pinned] = False
-        self.x_n = np.empty((d, self.n))
+        self.free = np.ascontiguousarray(w > 0)
+        self.P = np.zeros((self.n, 8))  # per particle: x (3), x_n (3), w, unused: one cache line
+        self.P[:, 6] = w
         self._hs = None
         forms = [s.compiled_form for s in sets]
-        distance = [(s, bs) for s, bs, f in zip(sets, batches, forms) if f == "distance"]
-        linear = [(s, bs) for s, bs, f in zip(sets, batches, forms) if f == "linear"]
-        self._order = [(f, bs) for f, bs in zip(forms, batches)]
-        # distance rows: every distance set's batches one after another
-        dist_batches = [b for _, bs in distance for b in bs]
-        self.dist = dict(batches=dist_batches, **self._distance_arrays(dist_batches))
-        lin_batches = [b for _, bs in linear for b in bs]
-        self.lin = dict(batches=lin_batches, **self._linear_arrays(lin_batches, d))
-        # each set's rows in the flat arrays, for its multipliers
-        self._spans = []
+        self._forms = forms
+        dist_batches = [b for bs, f in zip(batches, forms) if f == "distance" for b in bs]
+        lin_batches = [b for bs, f in zip(batches, forms) if f == "linear" for b in bs]
+        r = sum(len(b.idx) for b in dist_batches)
+        self.ij = np.zeros((r, 2), dtype=np.int32)  # distance rows: every distance set's groups one after another
+        self.dco = np.zeros((r, 4))  # L0, alpha~, 1 / denominator, gamma
+        start = 0
+        for b in dist_batches:  # a loop over the colour groups of the distance sets
+            stop = start + len(b.idx)
+            self.ij[start:stop], self.dco[start:stop, 0] = b.idx, b.L0
+            start = stop
+        r = sum(len(b.idx) for b in lin_batches)
+        self.idx, self.c, self.wc = np.zeros((r, 3), np.int32), np.zeros((r, 3)), np.zeros((r, 3))
+        self.offset, self.lco = np.zeros((r, d)), np.zeros((r, 3))  # lco: alpha~, 1 / denominator, gamma
+        start = 0
+        for b in lin_batches:  # a loop over the colour groups of the linear sets
+            k, stop = b.idx.shape[1], start + len(b.idx)
+            self.idx[start:stop, :k], self.c[start:stop, :k], self.wc[start:stop, :k] = b.idx, b.c, b.wc
+            self.offset[start:stop] = np.asarray(b.b, dtype=float).T if np.ndim(b.b) else b.b
+            start = stop
+        self.violations = np.empty(len(self.ij))
+        self._spans = []  # each set's rows in the flat arrays, for its multipliers
         start = {"distance": 0, "linear": 0}
         for s, f in zip(sets, forms):  # a loop over the few sets
             self._spans.append((f, start[f], start[f] + len(s)))
@@ -103,34 +115,10 @@ class CompiledSubstep:
                 return False
         return True
 
-    @staticmethod
-    def _distance_arrays(batches):
-        cat = np.concatenate
-
-        def joined(get, dtype=np.float64):
-            parts = [np.asarray(get(b), dtype=dtype) for b in batches]
-            return np.ascontiguousarray(cat(parts)) if parts else np.zeros(0, dtype=dtype)
-
-        return dict(i=joined(lambda b: b.idx[:, 0], np.int64), j=joined(lambda b: b.idx[:, 1], np.int64),
-                    L0=joined(lambda b: b.L0), wi=joined(lambda b: b.wi), wj=joined(lambda b: b.wj),
-                    rows=sum(len(b.idx) for b in batches))
-
-    @staticmethod
-    def _linear_arrays(batches, d):
-        r = sum(len(b.idx) for b in batches)
-        idx, c, wc, offset = np.zeros((r, 3), np.int64), np.zeros((r, 3)), np.zeros((r, 3)), np.zeros((r, d))
-        start = 0
-        for b in batches:  # a loop over the colour groups of the linear sets
-            k, stop = b.idx.shape[1], start + len(b.idx)
-            idx[start:stop, :k], c[start:stop, :k], wc[start:stop, :k] = b.idx, b.c, b.wc
-            offset[start:stop] = np.asarray(b.b, dtype=float).T if np.ndim(b.b) else b.b
-            start = stop
-        return dict(idx=idx, c=c, wc=wc, offset=offset, rows=r)
-
     def _segments(self):
         """One row (form, start, stop, width, damped) per colour group, in the order of the sweep."""
         out, start = [], {"distance": 0, "linear": 0}
-        for form, bs in self._order:  # a loop over the few sets, then their colours
+        for form, bs in zip(self._forms, self.batches):  # a loop over the few sets, then their colours
             for b in bs:
                 r = len(b.idx)
                 out.append((0 if form == "distance" else 1, start[form], start[form] + r, b.idx.shape[1],
@@ -139,48 +127,66 @@ class CompiledSubstep:
         return np.array(out, dtype=np.int64).reshape(-1, 5)
 
     def _coefficients(self, hs):
-        """alpha~, 1 / denominator and gamma per row of each form for substeps of hs (gathered when hs changes)."""
+        """alpha~, 1 / denominator and gamma of every row for substeps of hs (the batches' own; again when hs changes)."""
         if self._hs == hs:
             return
-        for part, form in ((self.dist, "distance"), (self.lin, "linear")):
-            at, inv, gamma = [], [], []
-            for s, bs in zip(self.sets, self.batches):  # a loop over the few sets, then their colours
-                if s.compiled_form != form:
-                    continue
-                for b in bs:
-                    s._coefficients(hs, b, self.formulation)
-                    at.append(_rows(b.at, len(b.idx)))
-                    inv.append(_rows(b.inv, len(b.idx)))
-                    gamma.append(_rows(b.gamma, len(b.idx)))
-            part["at"], part["inv"], part["gamma"] = (np.concatenate(a) if a else np.zeros(0) for a in (at, inv, gamma))
+        rows = {"distance": [], "linear": []}
+        for s, bs, form in zip(self.sets, self.batches, self._forms):  # a loop over the few sets, then their colours
+            for b in bs:
+                s._coefficients(hs, b, self.formulation)
+                rows[form].append(np.stack([_rows(a, len(b.idx)) for a in (b.at, b.inv, b.gamma)], axis=1))
+        if rows["distance"]:
+            self.dco[:, 1:] = np.concatenate(rows["distance"])
+        if rows["linear"]:
+            self.lco[:] = np.concatenate(rows["linear"])
         self._hs = hs
 
     def multipliers(self):
         """Zero multipliers for a step: a flat distance array, a (d, r) linear one, and each set's view into them."""
-        d_lam, l_lam = np.zeros(self.dist["rows"]), np.zeros((self.d, self.lin["rows"]))
+        d_lam, l_lam = np.zeros(len(self.ij)), np.zeros((self.d, len(self.idx)))
         views = [d_lam[a:b] if f == "distance" else l_lam[:, a:b] for f, a, b in self._spans]
         return d_lam, l_lam, views
 
-    def substep(self, x, v, a, G, hs, iterations, lams):
-        """One substep on x, v (d, n) in place; `a` (d, n) given accelerations or None for gravity `G` (q, d) alone.
+    @staticmethod
+    def force_terms(forces, d):
+        """The forces as rows the prediction evaluates itself, shape (q, 4); None if one of them it cannot.
 
-        `lams` from :meth:`multipliers`: set to zero, then accumulated (the views
-        hold each set's multipliers afterwards).
+        By :attr:`~particles.fields.Force.compiled_role`, in the forces' order:
+        uniform gravity ``(0, g)`` and damping, ``(1, d, 0, 0)`` for ``-d v``
+        or ``(2, rate, 0, 0)`` for ``-rate m v``. Any other force (wind, a
+        force of the user's) is evaluated by the solver in NumPy instead.
+        """
+        terms = []
+        for force in forces:  # a loop over the few force objects
+            role = getattr(force, "compiled_role", None)
+            if role == "gravity" and np.shape(force.g) == (d,):
+                terms.append([0.0, *np.asarray(force.g, dtype=float), *[0.0] * (3 - d)])
+            elif role == "damping":
+                rate = getattr(force, "rate", None)
+                terms.append([1.0, float(force.d), 0.0, 0.0] if rate is None else [2.0, float(rate), 0.0, 0.0])
+            else:
+                return None
+        return np.array(terms, dtype=np.float64).reshape(-1, 4)
+
+    def substep(self, x, v, a, terms, hs, iterations, lams, measure=False):
+        """One substep on x, v (d, n) in place; returns the largest ``|C|`` of the distances after it if `measure`.
+
+        `a` (d, n): the accelerations, or None for the forces of `terms`
+        (:meth:`force_terms`). `lams` from :meth:`multipliers`: set to zero,
+        then accumulated (the views hold each set's multipliers afterwards).
         """
         self._coefficients(hs)
-        dist, lin = self.dist, self.lin
         given = a is not None
-        a = a if given else np.zeros((self.d, 1))
-        kernel = pick(substep_kernel, dist["rows"] + lin["rows"])
-        kernel(x, v, self.x_n, np.ascontiguousarray(a, dtype=np.float64), given, G, self.m, self.free, float(hs),
-               int(iterations), self.formulation == "xpbd", self.segments,
-               dist["i"], dist["j"], dist["L0"], dist["wi"], dist["wj"], dist["at"], dist["inv"], dist["gamma"],
-               lams[0], lin["idx"], lin["c"], lin["wc"], lin["offset"], lin["at"], lin["inv"], lin["gamma"],
-               lams[1])
+        a = np.ascontiguousarray(a, dtype=np.float64) if given else np.zeros((self.d, 1))
+        # each colour group is a parallel loop of its own, and starting the threads costs tens of microseconds:
+        # threads only when the groups are long (pick's threshold on the mean group)
+        kernel = pick(substep_kernel, (len(self.ij) + len(self.idx)) // max(1, len(self.segments)))
+        kernel(x, v, a, given, terms, self.m, self.free, float(hs), int(iterations), self.formulation == "xpbd",
+               self.segments, self.P, self.ij, self.dco, lams[0], self.idx, self.c, self.wc, self.offset, self.lco,
+               lams[1], bool(measure), self.violations)
+        return float(np.max(self.violations, initial=0.0)) if measure else None
 
     def violation(self, x):
         """The largest ``|C|`` over the distance constraints at x (d, n), in metres (0 without any)."""
-        dist = self.dist
-        out = dist.setdefault("violation", np.empty(dist["rows"]))
-        pick(distance_violation, dist["rows"])(x, dist["i"], dist["j"], dist["L0"], out)
-        return float(np.max(out, initial=0.0))
+        pick(distance_violation, len(self.ij))(x, self.ij, self.dco, self.violations)
+        return float(np.max(self.violations, initial=0.0))

@@ -5,7 +5,7 @@ import pytest
 
 from particles import Collider, ParticleSystem, backends
 from particles.collisions import Plane, Sphere
-from particles.forces import Gravity
+from particles.forces import Damping, Gravity, Wind
 from particles.implicit import relax
 from particles.massspring import cloth, hair, string
 from particles.pbdconstraints import color_constraints
@@ -304,7 +304,16 @@ def _ball_sheet():
     return c, lambda **o: XPBD.from_system(c, collider=ball, **o)
 
 
+def _string_with(*forces):
+    """A 3D string of 12 particles pinned at one end, its springs as constraints, with these external forces."""
+    c = string(12, d=3, direction=[1.0, 0.0, 0.0], kd=0.1)
+    constraints, _ = constraints_from_system(c)
+    return c, lambda **o: XPBD(constraints, c.m, c.pinned, forces=[Gravity([0.0, 0.0, -G]), *forces], **o)
+
+
 COMPILED_CASES = {
+    "string, damping d": lambda: _string_with(Damping(d=0.002)),
+    "string, damping, wind (NumPy forces)": lambda: _string_with(Damping(rate=0.5), Wind([0.3, 0.2, 0.0], gust=0.5)),
     "cloth, pins, damped, compliance 1/k": lambda: (lambda c: (c, lambda **o: XPBD.from_system(c, **o)))(
         cloth(12, 12, kd=0.3)),
     "cloth, compliance 0": _rigid_cloth,
@@ -323,9 +332,9 @@ def _count_compiled_substeps(monkeypatch):
     calls = []
     original = xpbdstep.CompiledSubstep.substep
 
-    def counted(self, *args):
+    def counted(self, *args, **options):
         calls.append(1)
-        return original(self, *args)
+        return original(self, *args, **options)
 
     monkeypatch.setattr(xpbdstep.CompiledSubstep, "substep", counted)
     return calls
