@@ -2,7 +2,9 @@
 
 * lectures and masters (``solutions/``) must run without any error; a lecture
   embeds at least one animation player (it is executed once per session, see
-  ``executed_lecture`` in ``conftest.py``, and the course-site test reuses it);
+  ``executed_lecture`` in ``conftest.py``, and the course-site test reuses it)
+  and draws 8 to 15 figures (PNG images; the lectures still short of that are
+  listed in ``FEW_FIGURES``, as strict xfails);
 * a released exercise is run too, with errors allowed: its solution cells
   raise ``NotImplementedError`` by design, so the test asserts that the first
   error of the notebook is a ``NotImplementedError`` (nothing breaks before
@@ -23,6 +25,10 @@ ROOT = Path(__file__).resolve().parents[2]
 LECTURES = sorted((ROOT / "lectures").glob("[0-9][0-9]_*.ipynb"))
 MASTERS = sorted((ROOT / "solutions").glob("*.ipynb"))
 EXERCISES = sorted((ROOT / "exercises").glob("*.ipynb"))
+
+FIGURES = (8, 15)  # the figures a lecture draws, at least and at most
+# lectures that draw fewer figures than that so far: strict xfails, to be removed when fixed
+FEW_FIGURES = {"01_state_and_steppers.ipynb", "03_collisions.ipynb", "05_flocks.ipynb"}
 
 
 def _run(path, allow_errors=False):
@@ -49,6 +55,30 @@ def test_lecture_runs_clean_with_an_animation(path, executed_lecture):
     nb = executed_lecture(path)
     assert _errors(nb) == []
     assert _players(nb), f"{path.name}: no embedded HTML/JS animation player"
+
+
+def _figures(nb):
+    """The figures an executed notebook shows: its ``image/png`` outputs (players and widgets are not)."""
+    return sum("image/png" in o.get("data", {}) for c in nb.cells if c.cell_type == "code"
+               for o in c.get("outputs", []))
+
+
+def _figure_cases():
+    few = pytest.mark.xfail(strict=True, reason="listed in FEW_FIGURES: draws too few figures yet")
+    return [pytest.param(p, id=p.name, marks=[few] if p.name in FEW_FIGURES else []) for p in LECTURES]
+
+
+def test_few_figures_names_existing_lectures():
+    """Every FEW_FIGURES entry names a lecture that exists."""
+    assert FEW_FIGURES <= {p.name for p in LECTURES}
+
+
+@pytest.mark.parametrize("path", _figure_cases())
+def test_lectures_draw_8_to_15_figures(path, executed_lecture):
+    """An executed lecture shows 8 to 15 figures, counted as image/png outputs of its code cells."""
+    low, high = FIGURES
+    shown = _figures(executed_lecture(path))
+    assert low <= shown <= high, f"{path.name}: {shown} figures, expected {low} to {high}"
 
 
 @pytest.mark.parametrize("path", MASTERS, ids=[p.name for p in MASTERS])
