@@ -1,14 +1,15 @@
 """Vector helpers shared by the library's modules (private to the package).
 
-One helper, :func:`unit`, for the two layouts the library uses: columns of a
+:func:`unit`, for the two layouts the library uses: columns of a
 ``(dim, s)`` array (pair differences from :func:`particles.pairs.pair_differences`,
 one column per spring or pair) and rows of an ``(n, dim)`` array (gradients
-of implicit surfaces, one row per particle).
+of implicit surfaces, one row per particle); and :func:`rowdot`, the dot
+product of rows summed in coordinate order.
 """
 
 import numpy as np
 
-__all__ = ["unit"]
+__all__ = ["unit", "rowdot"]
 
 
 def unit(d, axis=0):
@@ -38,6 +39,35 @@ def unit(d, axis=0):
         L = np.sqrt(np.einsum("as,as->s", d, d))
         return L, np.divide(d, L, out=np.zeros_like(d), where=L != 0)
     if axis == 1:
-        L = np.sqrt(np.einsum("ij,ij->i", d, d))
+        L = np.sqrt(rowdot(d, d))
         return L, np.divide(d, L[:, None], out=np.zeros_like(d), where=L[:, None] != 0)
     raise ValueError(f"axis must be 0 (columns) or 1 (rows), got {axis!r}")
+
+
+def rowdot(a, b):
+    """``a_k . b_k`` for each row k, summed in coordinate order: ``(a_0 b_0 + a_1 b_1) + a_2 b_2``.
+
+    ``np.einsum("ij,ij->i", a, b)`` sums the three products of C-ordered rows
+    in another order than those of Fortran-ordered ones (and a one-row array
+    is both), so its last bit depends on the layout, and in the collisions
+    on which particles share an array; this sum does not (the compiled
+    collider of :mod:`particles.backends` sums the same way).
+
+    Parameters
+    ----------
+    a : ndarray, shape (n, dim)
+    b : ndarray, shape (n, dim) or (dim,)
+
+    Returns
+    -------
+    ndarray, shape (n,)
+
+    Examples
+    --------
+    >>> rowdot(np.array([[1.0, 2.0, 3.0]]), np.array([1.0, 0.0, 1.0])).tolist()
+    [4.0]
+    """
+    out = a[:, 0] * b[..., 0]
+    for k in range(1, a.shape[1]):  # a loop over the dim coordinates
+        out += a[:, k] * b[..., k]
+    return out

@@ -47,9 +47,11 @@ import numpy as np
 
 from ._checks import (as_float_array, mass_array, nonnegative_number, pinned_indices, positive_number,
                       restitution_coefficient)
+from .backends import check_backend, kernels_for
 from .crossing import cubic_path, first_crossing, hermite, hermite_coefficients, path_speed
 from .steppers import after
-from .surfaces import Box, Complement, Intersection, Plane, Sphere, Surface, Union
+from ._vectors import rowdot
+from .surfaces import Box, Complement, Cylinder, Intersection, Plane, Sphere, Surface, Union
 
 __all__ = [
     "Plane", "Sphere", "Box", "Union", "Intersection", "Complement", "Surface",
@@ -61,6 +63,7 @@ UNIT_TOL = 1e-9
 """Largest accepted ``| |n| - 1 |`` for the unit normals given to :func:`respond`."""
 ROUNDOFF_DEPTH = 1e-12
 """Depth (m) below which a particle that gets no impulse counts as on the surface, not in contact."""
+_PRIMITIVES = (Plane, Sphere, Box, Cylinder)  # their normal at a point inside points to its closest point
 
 
 def respond(v, n, restitution=1.0, friction=0.0):
@@ -101,7 +104,7 @@ def respond(v, n, restitution=1.0, friction=0.0):
     """
     v = as_float_array(v, "v", ndim=2)
     n = as_float_array(n, "n", shape=v.shape)
-    length = np.sqrt(np.einsum("ij,ij->i", n, n))
+    length = np.sqrt(rowdot(n, n))
     wrong = np.abs(length - 1.0) > UNIT_TOL
     if wrong.any():
         k = int(np.argmax(wrong))
@@ -112,13 +115,13 @@ def respond(v, n, restitution=1.0, friction=0.0):
 
 def _respond(v, n, eps, mu):
     """:func:`respond` without the argument checks."""
-    vn = np.einsum("ij,ij->i", v, n)
+    vn = rowdot(v, n)
     v_t = v - vn[:, None] * n
     vn = np.minimum(vn, 0.0)  # only approaching particles are changed
     dv_n = -(1.0 + eps) * vn[:, None] * n
     dv_t = np.zeros_like(v)
     if mu > 0:
-        speed_t = np.sqrt(np.einsum("ij,ij->i", v_t, v_t))
+        speed_t = np.sqrt(rowdot(v_t, v_t))
         slow = np.minimum(mu * (1.0 + eps) * -vn, speed_t)  # |tangential impulse| <= mu |normal impulse|
         scale = np.divide(slow, speed_t, out=np.zeros_like(slow), where=speed_t > 0)
         dv_t = -scale[:, None] * v_t
@@ -224,6 +227,13 @@ class Collider:
         Backtracking: points per step at which the path is tested for its
         first entry into the solid (a path that crosses a solid thinner than
         ``|v| h / samples`` between two samples can be missed).
+    backend : {None, "auto", "numpy", "numba"}, optional
+        Who fixes the steps of :meth:`stepper` (and :meth:`run`): this NumPy
+        code, or the same per particle compiled, in place on the step's end
+        state, for a :class:`Plane`, :class:`Sphere`, :class:`Box` or
+        :class:`~particles.surfaces.Cylinder` (combinations stay on NumPy);
+        see :mod:`particles.backends` (None: the global choice).
+        :meth:`collide` and :meth:`resolve` are always the NumPy reference.
 
     Notes
     -----
@@ -244,7 +254,9 @@ class Collider:
     ([[0.1, 0.05], [1.0, 1.0]], [0.05])
     """
 
-    def __init__(self, surface, restitution=1.0, friction=0.0, method="backtrack", max_bounces=4, samples=8):
+    def __init__(self, surface, restitution=1.0, friction=0.0, method="backtrack", max_bounces=4, samples=8,
+                 backend=None):
+        self.backend = check_backend(backend)
         if not isinstance(surface, Surface):
             raise ValueError(f"surface must be a Surface (Plane, Sphere, Box, ...), got {type(surface).__name__}")
         self.surface = surface
@@ -382,8 +394,8 @@ class Collider:
             v_new, dv_n, dv_t = _respond(vc, n, self.restitution, self.friction)
             rest = (1.0 - s) * dt[hit]
             ah = a[hit].copy()
-            a_n = np.einsum("ij,ij->i", ah, n)
-            resting = (a_n < 0) & (np.einsum("ij,ij->i", v_new, n) < -a_n * rest)
+            a_n = rowdot(ah, n)
+            resting = (a_n < 0) & (rowdot(v_new, n) < -a_n * rest)
             ah[resting] -= a_n[resting, None] * n[resting]  # the surface carries the inward pull
             if self.friction and resting.any():
                 ah[resting] -= _resting_friction(v_new[resting], ah[resting], n[resting], -a_n[resting],
@@ -457,7 +469,19 @@ class Collider:
             A stepper ``(f, X, t, h) -> X_new`` with the order and layout of
             `step`, and ``contacts``: the :class:`Contacts` of its latest step.
         """
+        kept = {}  # the masses and the free mask, per particle count
+
         def collide(X_old, X_new, t, h):
+            fast = kernels_for(self.backend, len(X_new))
+            if fast is not None and X_old.shape == X_new.shape == (len(X_new), 2, self.surface.d) \
+                    and X_new.dtype == X_old.dtype == np.float64:
+                if kept.get("n") != len(X_new):
+                    kept.update(n=len(X_new), m=np.ascontiguousarray(mass_array(m, len(X_new))),
+                                free=self._free(len(X_new), pinned))
+                found = fast.collide(self, X_old, X_new, t, positive_number(h, "h", "seconds"), kept["m"], kept["free"])
+                if found is not None:  # a primitive surface: fixed in place, compiled
+                    fixed.contacts = Contacts(*found)
+                    return X_new
             X_new, fixed.contacts = self.collide(X_old, X_new, t, h, m=m, pinned=pinned)
             return X_new
 
@@ -523,9 +547,9 @@ def _resting_friction(v, a_t, n, pressure, tau, mu):
 
     Returns the constant acceleration to subtract, shape (k, d).
     """
-    v_t = v - np.einsum("ij,ij->i", v, n)[:, None] * n
+    v_t = v - rowdot(v, n)[:, None] * n
     v_end = v_t + a_t * tau[:, None]  # tangential velocity at the end of the step without friction
-    speed = np.sqrt(np.einsum("ij,ij->i", v_end, v_end))
+    speed = np.sqrt(rowdot(v_end, v_end))
     removed = np.minimum(speed, mu * pressure * tau)
     scale = np.divide(removed, speed * tau, out=np.zeros_like(speed), where=(speed > 0) & (tau > 0))
     return scale[:, None] * v_end
@@ -534,12 +558,19 @@ def _resting_friction(v, a_t, n, pressure, tau, mu):
 def _push_directions(surface, x, p):
     """Unit vectors from inside points `x` to their surface points `p` (the normal there).
 
-    Where ``p`` is too close to ``x`` to give a direction, the gradient at
-    ``x`` is used. Unlike the gradient at ``p``, this is unambiguous at the
-    edges and corners of a box.
+    For the primitives (:class:`Plane`, :class:`Sphere`, :class:`Box`,
+    :class:`~particles.surfaces.Cylinder`) that is the normal at ``x``
+    itself, which the surface computes without subtracting two points that
+    may be a rounding error apart (``(p - x) / |p - x|`` for a particle
+    ``1e-5`` m deep is only good to ``1e-11``). For combined surfaces: ``p -
+    x``, normalized, or the gradient at ``x`` where ``p`` is too close to
+    ``x`` to give a direction. Unlike the gradient at ``p``, either is
+    unambiguous at the edges and corners of a box.
     """
+    if type(surface) in _PRIMITIVES:
+        return surface.normal(x)
     n = p - x
-    norm = np.sqrt(np.einsum("ij,ij->i", n, n))
+    norm = np.sqrt(rowdot(n, n))
     ok = norm > 1e-12 * (1.0 + np.abs(p).max(axis=1, initial=0.0))
     n[ok] /= norm[ok, None]
     if not ok.all():

@@ -32,6 +32,7 @@ import numpy as np
 
 from ._checks import as_float_array, count, index_array, nonnegative_number
 from ._vectors import unit
+from .backends import check_backend, kernels_for
 from .pairs import pair_differences
 from .steppers import after
 
@@ -214,6 +215,11 @@ class ProvotConstraint:
         Correct all springs at once with averaging (default: simple and
         cheap per pass), or sweep through groups of independent springs
         (fewer passes, each dearer); see :func:`provot_projection`.
+    backend : {None, "auto", "numpy", "numba"}, optional
+        Who projects in :meth:`stepper`: :func:`provot_projection`, or the
+        same passes compiled, in place on the step's end state (see
+        :mod:`particles.backends`; None: the global choice). :meth:`project`
+        is always the NumPy reference.
 
     Attributes
     ----------
@@ -232,7 +238,8 @@ class ProvotConstraint:
     """
 
     def __init__(self, indices, rest_length, n, pinned=(), max_strain=0.1, iterations=500, tol=0.005,
-                 method="jacobi"):
+                 method="jacobi", backend=None):
+        self.backend = check_backend(backend)
         self.indices = index_array(indices, "indices", 2)
         self.rest_length = as_float_array(rest_length, "rest_length", shape=(len(self.indices),))
         n = count(n, "n", 1)
@@ -283,10 +290,17 @@ class ProvotConstraint:
             attributes of `step`; positions are projected and velocities
             corrected by the same displacement divided by ``h``. Each step
             appends a :class:`ProjectionResult` (without positions) to
-            :attr:`history`.
+            :attr:`history`. With the numba backend the projection is
+            compiled (:func:`particles.backends.fixes.provot`) and corrects
+            the step's end state in place, in its own memory order.
         """
 
         def project(X_old, X_new, t, h):
+            fast = kernels_for(self.backend, len(X_new))
+            if fast is not None and len(X_new) == len(self.free) and X_new.dtype == np.float64:
+                worst, passes = fast.provot(self, X_new, h)
+                self.history.append(ProjectionResult(None, worst, passes, worst <= self.max_strain + self.tol + _ROUNDING))
+                return X_new
             result = self.project(X_new[:, 0])
             self.history.append(ProjectionResult(None, result.max_strain, result.iterations, result.converged))
             X_new[:, 1] += (result.x - X_new[:, 0]) / h

@@ -60,9 +60,12 @@ class Force:
 
     @property
     def compiled_role(self):
-        """What the compiled step (:mod:`particles.backends`) does with this force: "springs", "gravity" or None.
+        """What the compiled step (:mod:`particles.backends`) does with this force, or None (it calls ``add_to``).
 
-        A class declares its role in ``_compiled_role``; the role holds only
+        ``"springs"`` and ``"bending"``: computed in the step's block pass;
+        ``"gravity"``, ``"damping"`` and ``"wind"``: added in the update of
+        each particle; ``"clamp"``: a compiled kernel of its own. A class
+        declares its role in ``_compiled_role``; the role holds only
         while ``add_to`` is that class's own, so that a subclass with another
         force law is added by its own ``add_to`` (None: the step calls it).
         """
@@ -172,6 +175,7 @@ class Damping(Force):
     """
 
     uses_time = False
+    _compiled_role = "damping"  # the compiled step of particles.backends subtracts (d + rate m) v itself
 
     def __init__(self, d=None, rate=None):
         if (d is None) == (rate is None):
@@ -216,6 +220,7 @@ class Wind(Force):
     """
 
     uses_velocity = False
+    _compiled_role = "wind"  # the compiled step of particles.backends adds it in each particle's update
 
     @property
     def uses_time(self):

@@ -268,6 +268,7 @@ class Bending(Force):
 
     uses_velocity = False
     uses_time = False
+    _compiled_role = "bending"  # the compiled step of particles.backends computes these itself
 
     def __init__(self, triples, kb=1.0, rest_angle=None, x=None, backend=None):
         self._backend = check_backend(backend)
@@ -355,6 +356,7 @@ class Clamp(Force):
 
     uses_velocity = False
     uses_time = False
+    _compiled_role = "clamp"  # the compiled step of particles.backends has a kernel for it
 
     def __init__(self, pairs, direction, kb=1.0):
         ij = index_array(pairs, "pairs", 2)

@@ -30,7 +30,7 @@ References
 import numpy as np
 
 from ._checks import as_float_array, positive_number
-from ._vectors import unit
+from ._vectors import rowdot, unit
 
 __all__ = ["Surface", "Plane", "Sphere", "Box", "Cylinder", "Union", "Intersection", "Complement"]
 
@@ -134,7 +134,7 @@ class Surface:
             raise ValueError(f"x0 and x1 must have the same shape, got {x0.shape} and {x1.shape}")
         from .crossing import first_crossing
 
-        chord = np.sqrt(np.einsum("ij,ij->i", x1 - x0, x1 - x0))  # |dx/ds| on a segment
+        chord = np.sqrt(rowdot(x1 - x0, x1 - x0))  # |dx/ds| on a segment
         return first_crossing(self, lambda idx, s: x0[idx] + s[:, None] * (x1[idx] - x0[idx]),
                               len(x0), speed=chord)[0]
 
@@ -235,7 +235,7 @@ class Sphere(Surface):
         r = np.empty_like(x)
         for a in range(self.d):  # a loop over the d coordinates
             r[:, a] = x[:, a] - self.center[a]
-        return r, np.sqrt(np.einsum("ij,ij->i", r, r))
+        return r, np.sqrt(rowdot(r, r))
 
     def _directions(self, x):
         """Unit vectors from the centre; the centre itself gets the first axis."""
@@ -314,7 +314,7 @@ class Box(Surface):
     def _gradient(self, x):
         q, side = self._q(x)
         g = np.maximum(q, 0.0) * side
-        outside = np.sqrt(np.einsum("ij,ij->i", g, g))
+        outside = np.sqrt(rowdot(g, g))
         out = outside > 0
         g[out] /= outside[out, None]
         inner = np.flatnonzero(~out)  # inside: the normal of the nearest face
@@ -385,8 +385,8 @@ class Cylinder(Surface):
     def _offsets(self, x):
         """Offsets ``r`` from the axis, shape (n, 3), and their lengths."""
         y = x - self.point
-        r = y - np.outer(y @ self.axis, self.axis)
-        return r, np.sqrt(np.einsum("ij,ij->i", r, r))
+        r = y - np.outer(rowdot(y, self.axis), self.axis)
+        return r, np.sqrt(rowdot(r, r))
 
     def _directions(self, x):
         """Unit offsets from the axis; points on the axis get a fixed perpendicular.
@@ -397,8 +397,8 @@ class Cylinder(Surface):
         """
         r, dist = self._offsets(x)
         u = r / np.maximum(dist, 1e-300)[:, None]
-        u -= np.outer(u @ self.axis, self.axis)
-        size = np.sqrt(np.einsum("ij,ij->i", u, u))
+        u -= np.outer(rowdot(u, self.axis), self.axis)
+        size = np.sqrt(rowdot(u, u))
         on_axis = size < 0.5
         u[on_axis], size[on_axis] = self._across, 1.0
         return u / size[:, None]
@@ -411,7 +411,7 @@ class Cylinder(Surface):
 
     def _closest(self, x):
         y = x - self.point
-        foot = self.point + np.outer(y @ self.axis, self.axis)  # the nearest point of the axis
+        foot = self.point + np.outer(rowdot(y, self.axis), self.axis)  # the nearest point of the axis
         return foot + self.radius * self._directions(x)
 
     def __repr__(self):

@@ -67,12 +67,18 @@ inside a wrapper such as Provot's constraint or a collider, or called
 directly) takes the whole step from :func:`compiled_step`, one parallel pass
 over blocks of particles (:mod:`particles.backends._step_kernels`): each
 block copies the particles its springs touch into rows ``(x, v)``, computes
-its springs, adds gravity, and updates its own particles; forces without a
-compiled role (wind, drag, bending) are added by their own ``add_to`` before.
-It agrees with the NumPy step to rounding, has the same bits on any number
-of threads, and is what ``bench/bench_backends.py`` times against Warp. With
-the NumPy backend (or below :data:`AUTO_MIN` particles on ``"auto"``) the
-step is the slide's, bit for bit.
+its springs and bending joints, adds air damping, wind and gravity, and
+updates its own particles; clamps have a kernel of their own
+(:attr:`~particles.fields.Force.compiled_role` says what each force is).
+Provot's pass and a collider's fix run compiled after the step, in place
+(:mod:`particles.backends.fixes`). A force without a compiled form is added
+by its own ``add_to`` with ``"numba"``; with ``"auto"`` the system keeps the
+NumPy step (NumPy's loops over the compiled step's C-ordered rows would be
+slower than the NumPy step). It agrees with the NumPy step to rounding, has
+the same bits on any number of threads, and is what ``bench/bench_backends.py``
+times against Warp (``bench/bench_builders.py``: the builders'
+configurations). With the NumPy backend (or below :data:`AUTO_MIN`
+particles on ``"auto"``) the step is the slide's, bit for bit.
 
 **Why numba.** It compiles plain Python loops over NumPy arrays, so the
 kernel reads as the slide's loop, with the same names; it ships as wheels
@@ -252,10 +258,15 @@ def compiled_step(system):
     if not springs or not _all_compiled(springs, system.n):
         return None
     from .compiled import CompiledStep  # noqa: PLC0415  (loaded by _all_compiled already)
-    step = CompiledStep(system, _all_compiled)
+    step = CompiledStep(system, _all_compiled, _automatic)
     return step if step.parts(system.n) is not None else None
 
 
 def _all_compiled(forces, n):
     """Whether every one of `forces` runs on the compiled kernels for `n` particles (each by its ``_backend``)."""
     return all(kernels_for(backend, n) is not None for backend in {f._backend for f in forces})
+
+
+def _automatic(forces):
+    """Whether one of `forces` leaves the choice to ``"auto"`` (its own ``_backend`` or the global choice)."""
+    return any((get_backend() if f._backend is None else f._backend) == "auto" for f in forces)

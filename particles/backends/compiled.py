@@ -17,9 +17,11 @@ from ._kernels import incidence, parallel, pick, rank_blocks, spring_forces, spr
 from ._kernels import lennard_jones as lennard_jones_pairs
 from ._kernels import nbody as nbody_sums
 from ._pbd_kernels import distance_group, distance_jacobi
-from ._step_kernels import symplectic_euler_blocks
+from ._step_kernels import clamp_forces, symplectic_euler_blocks
+from .fixes import collide, provot
 
-__all__ = ["springs", "bending", "lennard_jones", "nbody", "distance_project", "CompiledStep"]
+__all__ = ["springs", "bending", "lennard_jones", "nbody", "distance_project", "CompiledStep", "StepParts",
+           "provot", "collide"]
 
 
 def _store(owner):
@@ -177,55 +179,105 @@ _ALONE = _count_alone()
 STEP_BLOCK = 2048
 
 
+class StepParts:
+    """What the compiled step does with each of a system's forces (:meth:`CompiledStep.parts`).
+
+    Attributes
+    ----------
+    sets : list of Springs
+        One to three spring sets, computed in the block pass.
+    bending : Bending or None
+        One bending set, computed in the block pass.
+    G : ndarray, shape (d,)
+        The sum of the uniform gravities, added to every free particle's acceleration.
+    D, R : float
+        Air damping, ``F -= (D + R m) v``: the sum of the coefficients ``d`` (kg/s) and of the rates (1/s).
+    winds : list of Wind
+        Computed in the particles' update.
+    clamps : list of Clamp
+        Computed by their own compiled kernel before the pass.
+    others : list of Force
+        Forces without a compiled form, added by their own ``add_to`` before the pass.
+    """
+
+    def __init__(self, d):
+        self.sets, self.bending, self.G, self.D, self.R = [], None, np.zeros(d), 0.0, 0.0
+        self.winds, self.clamps, self.others = [], [], []
+
+
 class CompiledStep:
     """A system's symplectic Euler step in one compiled pass (:func:`particles.backends.compiled_step`).
 
     :meth:`symplectic_euler` takes the step in one parallel pass over blocks
     of particles (:mod:`particles.backends._step_kernels`): the springs
-    (:class:`~particles.springs.Springs`, up to three sets) and the update of
-    every particle compiled, uniform gravity folded into the update, every
-    other force added by its own ``add_to`` as in
+    (:class:`~particles.springs.Springs`, up to three sets, with their
+    damping), the bending joints (:class:`~particles.springs.Bending`) and
+    the update of every particle compiled, with air damping
+    (:class:`~particles.fields.Damping`), wind (:class:`~particles.fields.Wind`,
+    gusts too) and uniform gravity folded into the update; clamps
+    (:class:`~particles.springs.Clamp`) by a compiled kernel of their own;
+    every other force added by its own ``add_to`` as in
     :meth:`~particles.ParticleSystem.total_force`. It agrees with the NumPy
     step to rounding (about 1e-16 relative: the forces are summed in another
     order, with fused multiply-adds) and has the same bits on any number of
     threads.
     """
 
-    def __init__(self, system, compiled):
+    def __init__(self, system, compiled, automatic=None):
         self.system = system
         self.compiled = compiled  # compiled(forces, n): whether all these forces run compiled for n particles
+        self.automatic = automatic or (lambda forces: False)  # automatic(forces): whether one is on "auto"
         self._spare = _store(system).setdefault("spare", [])  # earlier new states, reused once nobody holds them
 
     def parts(self, n):
-        """The spring sets, the summed gravity and the other forces; None when the step does not apply.
+        """The :class:`StepParts` of the system's forces; None when the step does not apply.
 
         By :attr:`~particles.fields.Force.compiled_role`: up to three
         :class:`~particles.springs.Springs` sets, all resolving to numba, in
-        2D or 3D; gravity folded into the update; the rest added by their own
-        ``add_to``.
+        2D or 3D; one :class:`~particles.springs.Bending` set that resolves
+        to numba; gravity, damping, wind and clamps of the system's
+        dimension; the rest added by their own ``add_to``. When a spring
+        set's backend is ``"auto"`` (its own or the global choice), the step
+        applies only if it covers every force (no ``others``): a force left
+        to NumPy would read the compiled step's C-ordered state with NumPy's
+        slow strided loops, and the NumPy step is then faster.
         """
         d = self.system.d
-        sets, others, G = [], [], np.zeros(d)
+        found = StepParts(d)
         for force in self.system.forces:  # a loop over the system's few forces
             role = getattr(force, "compiled_role", None)
             if role == "springs":
-                sets.append(force)
+                found.sets.append(force)
             elif role == "gravity" and np.shape(force.g) == (d,):
-                G += force.g
+                found.G += force.g
+            elif role == "damping":
+                found.D, found.R = (found.D + force.d, found.R) if force.rate is None else (found.D, found.R + force.rate)
+            elif role == "wind" and np.shape(force.strength) == (d,):
+                found.winds.append(force)
+            elif role == "bending" and found.bending is None and self.compiled([force], n):
+                found.bending = force
+            elif role == "clamp" and force.direction.shape[1:] == (d,):
+                found.clamps.append(force)
             else:
-                others.append(force)
+                found.others.append(force)
+        sets = found.sets
         if not sets or len(sets) > 3 or d not in (2, 3) or not self.compiled(sets, n):
             return None
-        return sets, G, others
+        if found.others and self.automatic(sets):
+            return None
+        return found
 
-    def _layout(self, sets, n):
-        """The springs by lower end (compressed rows), the springs entering each block, and the blocks' windows.
+    def _layout(self, sets, bending, n):
+        """The springs by lower end (compressed rows), the springs entering each block, the joints touching
+        each block, and the blocks' windows.
 
-        Kept on the system until the spring sets or the particle count change;
-        their parameters (``rest_length``, ``k``, ``kd``) are read at every step.
+        Kept on the system until the spring sets, the bending set or the
+        particle count change; their parameters (``rest_length``, ``k``,
+        ``kd``, ``kb``, ``rest_angle``) are read at every step.
         """
         store = _store(self.system)
-        key = (n, tuple((id(f.i), id(f.j), len(f.i)) for f in sets))
+        key = (n, tuple((id(f.i), id(f.j), len(f.i)) for f in sets),
+               None if bending is None else (id(bending.i), id(bending.j), id(bending.l), len(bending.i)))
         if store.get("step_key") == key:
             return store["step_layout"]
         blocks = max(1, min(64, n // STEP_BLOCK))
@@ -259,13 +311,14 @@ class CompiledStep:
             entries += [own, enter]
             lo[c] = min(lo[c], a[enter].min(initial=n))
             hi[c] = max(hi[c], nbr[own].max(initial=0) + 1)
+        joints = _joints(bending, start, lo, hi)
         entries = np.concatenate(entries)
         rb0 = np.concatenate([[0], np.cumsum([len(r) for r in rowp[1::2]]) + start[1:]])
         rptr = np.concatenate([[0], np.cumsum(np.concatenate(rcount))])
         row0 = np.concatenate([[0], np.cumsum(hi - lo)])
         d = self.system.d
         layout = dict(start=start, lo=lo, hi=hi, row0=row0, xw=np.empty((row0[-1], 2 * d)),
-                      fw=np.empty((row0[-1], d)), pinned=None,
+                      fw=np.empty((row0[-1], d)), pinned=None, joints=joints, other=np.zeros((1, d)),
                       rows=(rb0, np.concatenate(rowp).astype(np.uint32), rptr.astype(np.uint32),
                             np.concatenate(ends).astype(np.uint32), which[entries], sidx[entries]))
         store.update(step_key=key, step_layout=layout)
@@ -288,27 +341,50 @@ class CompiledStep:
         self._spare[:] = [out] + self._spare[:1]
         return out
 
+    def _other(self, found, layout, X, t):
+        """The forces computed before the pass, (n, d) (clamps compiled, the others by add_to); None if none."""
+        if not found.clamps and not found.others:
+            return None
+        n, d = X.shape[0], X.shape[2]
+        other = layout["other"]
+        if other.shape != (n, d):
+            other = layout["other"] = np.zeros((n, d))
+        else:
+            other.fill(0.0)
+        x = X[:, 0]
+        for clamp in found.clamps:  # a loop over the few clamps' sets (a hair has one)
+            indices_fit(clamp._highest, n, "pairs")
+            clamp_forces(other, x, clamp.i, clamp.j, clamp.direction, _per_spring(clamp.kb, len(clamp.i)))
+        for force in found.others:  # a loop over the other forces: each adds its own, as in total_force
+            force.add_to(other, x, X[:, 1], t, self.system.m)
+        return other
+
     def symplectic_euler(self, X, t, h):
         """One symplectic Euler step from X (n, 2, d) at t by h, compiled; None when it does not apply.
 
         It does not apply (and the caller takes the NumPy step) when X is not
         the system's state shape, when a spring set does not resolve to the
-        numba backend (e.g. ``"auto"`` after particles were removed), or when
-        the system has more than three spring sets.
+        numba backend (e.g. ``"auto"`` after particles were removed), when
+        the system has more than three spring sets, or, on ``"auto"``, when a
+        force has no compiled form (see :meth:`parts`).
         """
         system = self.system
         n = system.n
         if X.shape != system.X.shape or X.dtype != np.float64 or (found := self.parts(n)) is None:
             return None
-        sets, G, others = found
-        for f in sets:  # a loop over the few spring sets
+        sets, bending = found.sets, found.bending
+        for f in sets + ([] if bending is None else [bending]):  # a loop over the few spring and bending sets
             indices_fit(f._highest, n, "indices")
-        layout = self._layout(sets, n)
+        layout = self._layout(sets, bending, n)
         arrays = [_per_spring(a, len(f.i)) for f in sets for a in (f.rest_length, f.k, f.kd)]
         arrays += arrays[:3] * (3 - len(sets))  # unused slots (no entry refers to them)
-        other = np.zeros((n if others else 1, system.d))
-        for force in others:  # a loop over the other forces: each adds its own, as in total_force
-            force.add_to(other, X[:, 0], X[:, 1], t, system.m)
+        joints = layout["joints"]
+        if bending is None:
+            arrays += [*joints, np.zeros(0), np.zeros(0)]
+        else:
+            b = len(bending.i)
+            arrays += [*joints, _per_spring(bending.kb, b), _per_spring(bending.rest_angle, b)]
+        other = self._other(found, layout, X, t)
         pinned = system.pinned
         if layout["pinned"] is None or pinned.shape != layout["pinned"].shape or not (pinned == layout["pinned"]).all():
             layout["free"] = np.ones(n, dtype=np.bool_)
@@ -319,6 +395,40 @@ class CompiledStep:
         xw = layout["xw"] if copy else X.reshape(n, 2 * system.d)
         pick(symplectic_euler_blocks, len(layout["rows"][3]))(
             X, copy, layout["start"], layout["lo"], layout["hi"], layout["row0"], xw, layout["fw"],
-            *layout["rows"], *arrays, other, bool(others),
-            np.ascontiguousarray(system.m, dtype=np.float64), layout["free"], tuple(G.tolist()), float(h), out)
+            *layout["rows"], *arrays, float(found.D), float(found.R), _wind_table(found.winds, t, system.d),
+            layout["other"] if other is None else other, other is not None,
+            np.ascontiguousarray(system.m, dtype=np.float64), layout["free"], tuple(found.G.tolist()), float(h), out)
         return out
+
+
+def _joints(bending, start, lo, hi):
+    """The joints touching each block (``jb0``, ``joints``) and their particles as unsigned indices.
+
+    Joint t is listed for each block that holds one of its three particles
+    (in increasing t within a block); the blocks' windows ``lo``, ``hi`` are
+    widened, in place, to hold all three particles of their joints.
+    """
+    blocks = len(start) - 1
+    if bending is None:
+        empty = np.zeros(0, dtype=np.uint32)
+        return np.zeros(blocks + 1, dtype=np.int64), empty, empty, empty, empty
+    ijl = np.stack([bending.i, bending.j, bending.l])  # (3, b)
+    b = ijl.shape[1]
+    touched = np.unique((np.searchsorted(start, ijl, side="right") - 1) * b + np.arange(b))  # block c, joint t
+    block, t = touched // b, touched % b
+    np.minimum.at(lo, block, ijl.min(axis=0)[t])
+    np.maximum.at(hi, block, ijl.max(axis=0)[t] + 1)
+    return (np.searchsorted(block, np.arange(blocks + 1)), t.astype(np.uint32),
+            *(np.ascontiguousarray(r, dtype=np.uint32) for r in ijl))
+
+
+def _wind_table(winds, t, d):
+    """The rows ``s, u, gust, t / period, wavelength, per_mass`` of the winds at time t, shape (k, 2 d + 4)."""
+    W = np.zeros((len(winds), 2 * d + 4))
+    for q, wind in enumerate(winds):  # a loop over the few winds
+        s = wind.strength
+        norm = np.linalg.norm(s)
+        W[q, :d] = s
+        W[q, d:2 * d] = s / norm if norm > 0 else 0.0
+        W[q, 2 * d:] = wind.gust, t / wind.period, wind.wavelength, float(wind.per_mass)
+    return W

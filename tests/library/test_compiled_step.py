@@ -16,10 +16,10 @@ import pytest
 from particles import backends
 from particles.constraints import ProvotConstraint
 from particles.errors import SimulationDiverged
-from particles.forces import Damping
+from particles.forces import Attractor, Damping, Field, Force, Vortex, Wind
 from particles.integrators import symplectic_euler
 from particles.massspring import cloth, hair, string
-from particles.springs import Springs
+from particles.springs import Bending, Springs
 
 pytestmark = pytest.mark.skipif("numba" not in backends.available(),
                                 reason="numba is not installed (pip install 'particles[fast]')")
@@ -57,6 +57,48 @@ def _systems():
     ]
 
 
+def _with(make, *forces):
+    """`make` with more forces appended."""
+    def made():
+        system = make()
+        system.forces += list(forces)
+        return system
+    return made
+
+
+def _builder_systems():
+    """The builders' documented options, each covered by the compiled step (name, builder)."""
+    phys = dict(scaling="physical")
+    return [
+        ("cloth, physical, air damping (rate)", lambda: cloth(10, 10, damping=0.05, **phys)),
+        ("cloth, naive, air damping in kg/s", lambda: cloth(10, 10, damping=0.01, kd=0.02)),
+        ("cloth, bending and spring damping", lambda: cloth(10, 10, bending_modulus=1e-3, kd=1e-3, **phys)),
+        ("cloth, naive bending", lambda: cloth(9, 11, kb=0.002)),
+        ("cloth, wind and drag", lambda: cloth(10, 10, wind=[2.0, 0.0, 1.0], damping=0.05, **phys)),
+        ("cloth, top edge pinned", lambda: cloth(10, 10, pins="top edge", **phys)),
+        ("cloth, horizontal, no pins", lambda: cloth(8, 8, plane="horizontal", pins=None, **phys)),
+        ("cloth, gusts and a force wind, two dampings",
+         _with(lambda: cloth(10, 10, kd=0.01), Wind([0.3, 0.1, 0.0], gust=0.5, period=0.01, wavelength=0.3),
+               Wind([1.0, 0.0, 0.5], gust=0.2, period=0.02, per_mass=True), Damping(rate=0.3), Damping(0.002))),
+        ("string, physical, damped, 3D", lambda: string(30, d=3, scaling="physical", damping=0.1, kd=0.01)),
+        ("string pinned at both ends", lambda: string(30, pin="both", span=0.8, scaling="physical", damping=0.2)),
+        ("hair, physical, root clamp", lambda: hair(25, scaling="physical", damping=0.05)),
+        ("hair in 3D, rest angles", lambda: _bent_hair()),
+        ("hair, pair pin, gusts in 2D", _with(lambda: hair(20, pin="pair", kd=0.001),
+                                             Wind([0.2, 0.0], gust=0.4, period=0.01, wavelength=0.2))),
+    ]
+
+
+def _bent_hair():
+    """A 3D hair whose joints rest bent (rest angles from a curved start), and its clamp."""
+    system = hair(20, d=3, direction=[1.0, 0.0, 0.2])
+    bend = [f for f in system.forces if isinstance(f, Bending)][0]
+    x = system.X[:, 0].copy()
+    x[:, 1] = 0.02 * np.sin(6 * x[:, 0])
+    bend.rest_angle = bend.angles(x)
+    return system
+
+
 def _runs(make, steps=5, method="symplectic_euler", block=None, monkeypatch=None):
     """The end states of the same run with every force on NumPy, then on numba."""
     out = {}
@@ -78,10 +120,23 @@ def test_compiled_runs_agree_with_numpy_runs(name, make):
     _close(reference, compiled_run)
 
 
+@pytest.mark.parametrize("name, make", _builder_systems(), ids=[n for n, _ in _builder_systems()])
+def test_every_builder_option_runs_compiled_and_agrees_with_numpy(name, make):
+    """Each builder option (damping, bending, wind, pins, clamps) is in the compiled step; runs agree to 1e-12."""
+    system = make()
+    with backends.using("numba"):
+        step = backends.compiled_step(system)
+        assert step is not None and step.parts(system.n).others == []
+    reference, compiled_run = _runs(make)
+    _close(reference, compiled_run)
+
+
 @pytest.mark.parametrize("block", [1, 7, 16, 40])
-def test_blocks_smaller_than_a_spring_agree(block, monkeypatch):
-    """Blocks of 1 to 40 particles on a 12 x 12 cloth (flexion springs cross two or more blocks): still 1e-12."""
-    reference, compiled_run = _runs(lambda: cloth(12, 12, kd=0.05), block=block, monkeypatch=monkeypatch)
+@pytest.mark.parametrize("bending", [0.0, 1e-3], ids=["springs", "bending"])
+def test_blocks_smaller_than_a_spring_agree(block, bending, monkeypatch):
+    """Blocks of 1 to 40 particles on a 12 x 12 cloth (flexion springs and joints cross blocks): still 1e-12."""
+    reference, compiled_run = _runs(lambda: cloth(12, 12, kd=0.05, scaling="physical", bending_modulus=bending),
+                                    block=block, monkeypatch=monkeypatch)
     _close(reference, compiled_run)
 
 
@@ -105,14 +160,19 @@ def test_symplectic_euler_takes_the_compiled_step_and_numpy_does_not():
     np.testing.assert_array_equal(X, given)  # the state given is not modified
 
 
-def test_the_same_bits_on_one_thread_and_on_two(monkeypatch):
-    """A 24 x 24 cloth in blocks of 50 particles: one thread, two threads and the serial kernel give the same bits."""
+@pytest.mark.parametrize("make", [lambda: cloth(24, 24, kd=0.05),
+                                  lambda: cloth(24, 24, kd=0.05, scaling="physical", bending_modulus=1e-3,
+                                                damping=0.05, wind=[1.0, 0.0, 0.5]),
+                                  lambda: hair(600, kd=0.001, damping=0.1)],
+                         ids=["springs", "bending, damping, wind", "hair with its clamp"])
+def test_the_same_bits_on_one_thread_and_on_two(make, monkeypatch):
+    """Blocks of 50 particles: one thread, two threads and the serial kernel give the same bits."""
     import numba
 
     from particles.backends import _kernels, compiled
 
     monkeypatch.setattr(compiled, "STEP_BLOCK", 50)
-    system = _shaken(cloth(24, 24, kd=0.05))
+    system = _shaken(make())
     X = system.state()
     before = numba.get_num_threads()
     results = []
@@ -165,6 +225,50 @@ class _Stiffer(Springs):
         G = np.zeros_like(F)
         super().add_to(G, x, v, t, m)
         F += 2.0 * G
+
+
+class _Custom(Force):
+    """A force of the user's own: the compiled step has no form of it."""
+
+    def add_to(self, F, x, v, t, m):
+        F[:, 0] += 0.01 * m
+
+
+UNCOVERED = [Field(lambda x, t: -0.1 * x), Attractor([0.5, 0.5, -1.0], 0.01), Vortex([0.5, 0.5, 0.0], 0.01),
+             _Custom()]
+
+
+@pytest.mark.parametrize("extra", UNCOVERED, ids=[type(f).__name__ for f in UNCOVERED])
+def test_auto_takes_the_compiled_step_exactly_where_it_covers_every_force(extra, monkeypatch):
+    """"auto": the compiled step for the builders' systems; with a force it has no form of, the NumPy step.
+
+    A force left to its own ``add_to`` would read the compiled step's
+    C-ordered rows with NumPy's slow strided loops, so ``"auto"`` keeps the
+    NumPy step then (its springs still on their compiled kernel); an
+    explicit ``"numba"`` takes the compiled step all the same.
+    """
+    monkeypatch.setattr(backends, "AUTO_MIN", 1)  # "auto" compiles these small systems too
+    for name, make in _builder_systems():  # a loop over the builders' options: all covered
+        system = make()
+        with backends.using("auto"):
+            assert backends.compiled_step(system) is not None, name
+    system = _with(lambda: cloth(10, 10, damping=0.05, scaling="physical"), extra)()
+    with backends.using("auto"):
+        assert backends.compiled_step(system) is None
+        assert system.fused_symplectic_euler(system.state(), 0.0, H) is None
+    with backends.using("numba"):
+        assert backends.compiled_step(system).parts(system.n).others == [extra]
+    bending_on_numpy = cloth(10, 10, scaling="physical", bending_modulus=1e-3)
+    [f for f in bending_on_numpy.forces if isinstance(f, Bending)][0]._backend = "numpy"
+    with backends.using("auto"):
+        assert backends.compiled_step(bending_on_numpy) is None  # a bending set kept on NumPy by its own choice
+    out = {}
+    for backend in ("numpy", "auto", "numba"):
+        s = _shaken(_with(lambda: cloth(10, 10, damping=0.05, scaling="physical"), extra)())
+        with backends.using(backend):
+            out[backend] = s.run(5 * H, H, method="symplectic_euler")[1][-1]
+    _close(out["numpy"], out["auto"])
+    _close(out["numpy"], out["numba"])
 
 
 def test_where_it_does_not_apply_the_numpy_step_is_taken():
