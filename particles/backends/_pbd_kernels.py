@@ -10,7 +10,12 @@ two give the same bits.
 
 import math
 
-from ._kernels import _jit, prange
+from ._kernels import _jit, numba, prange
+
+
+def _inline(fn):
+    """`fn` compiled into each kernel that calls it (numba's IR inlining), so that its flags become constants."""
+    return fn if numba is None else numba.njit(inline="always")(fn)
 
 
 @_jit(parallel=True)
@@ -83,6 +88,65 @@ def distance_jacobi(x, x_n, lam, i, j, L0, wi, wj, at, inv, gamma, scale, xpbd, 
             x[c, p] += si[c, p] - sj[c, p]
 
 
+@_inline
+def _distance_row(P, ij, dco, lam, r, three, xpbd, damped):
+    """Project distance row r on the particle rows P (x in columns 0-2, x_n in 3-5, w in 6): Distance.project's steps."""
+    pa, pb = ij[r, 0], ij[r, 1]
+    d0 = P[pa, 0] - P[pb, 0]
+    d1 = P[pa, 1] - P[pb, 1]
+    d2 = P[pa, 2] - P[pb, 2] if three else 0.0
+    L = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    Lg = max(L, 1e-150)
+    lr = lam[r]
+    if xpbd and not damped:
+        dl = (dco[r, 0] - L - dco[r, 1] * lr) * dco[r, 2]
+    elif xpbd:
+        rel = d0 * (d0 - (P[pa, 3] - P[pb, 3])) + d1 * (d1 - (P[pa, 4] - P[pb, 4]))
+        if three:
+            rel += d2 * (d2 - (P[pa, 5] - P[pb, 5]))
+        dl = (-(L - dco[r, 0]) - dco[r, 1] * lr - dco[r, 3] * (rel / Lg)) * dco[r, 2]
+    else:
+        dl = -(L - dco[r, 0]) * dco[r, 2]
+    if xpbd:
+        lam[r] = lr + dl
+    scale = dl / Lg
+    wa, wb = P[pa, 6], P[pb, 6]
+    d0 *= scale
+    d1 *= scale
+    P[pa, 0] += wa * d0
+    P[pb, 0] -= wb * d0
+    P[pa, 1] += wa * d1
+    P[pb, 1] -= wb * d1
+    if three:
+        d2 *= scale
+        P[pa, 2] += wa * d2
+        P[pb, 2] -= wb * d2
+
+
+@_inline
+def _linear_row(P, idx, c, wc, offset, lco, lam, r, dim, width, xpbd, damped):
+    """Project linear row r, ``C = sum_k c_k x_{idx_k} - offset``, each coordinate on its own: _Linear.project's steps."""
+    for e in range(dim):
+        C = 0.0
+        for k in range(width):
+            C += c[r, k] * P[idx[r, k], e]
+        C -= offset[r, e]
+        lr = lam[e, r]
+        if xpbd:
+            res = -C - lco[r, 0] * lr
+            if damped:
+                Cn = 0.0
+                for k in range(width):
+                    Cn += c[r, k] * P[idx[r, k], 3 + e]
+                res -= lco[r, 2] * (C + offset[r, e] - Cn)  # gamma (C(x) - C(x_n))
+            dl = res * lco[r, 1]
+            lam[e, r] = lr + dl
+        else:
+            dl = -C * lco[r, 1]
+        for k in range(width):
+            P[idx[r, k], e] += wc[r, k] * dl
+
+
 @_jit(parallel=True)
 def substep(x, v, a, given, terms, m, free, hs, iterations, xpbd, segments, P,
             ij, dco, d_lam, idx, c, wc, offset, lco, l_lam, measure, violation):
@@ -132,59 +196,21 @@ def substep(x, v, a, given, terms, m, free, hs, iterations, xpbd, segments, P,
         for s in range(len(segments)):  # colour after colour: the Gauss-Seidel order
             form, start, stop, width, damped = segments[s, 0], segments[s, 1], segments[s, 2], segments[s, 3], \
                 segments[s, 4] != 0
-            if form == 0:  # distance rows: the arithmetic of distance_group
+            if form == 0 and three and xpbd and damped:  # distance rows, each case its own loop without branches
                 for r in prange(start, stop):
-                    pa, pb = ij[r, 0], ij[r, 1]
-                    d0 = P[pa, 0] - P[pb, 0]
-                    d1 = P[pa, 1] - P[pb, 1]
-                    d2 = P[pa, 2] - P[pb, 2] if three else 0.0
-                    L = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-                    Lg = max(L, 1e-150)
-                    lr = d_lam[r]
-                    if xpbd and not damped:
-                        dl = (dco[r, 0] - L - dco[r, 1] * lr) * dco[r, 2]
-                    elif xpbd:
-                        rel = d0 * (d0 - (P[pa, 3] - P[pb, 3])) + d1 * (d1 - (P[pa, 4] - P[pb, 4]))
-                        if three:
-                            rel += d2 * (d2 - (P[pa, 5] - P[pb, 5]))
-                        dl = (-(L - dco[r, 0]) - dco[r, 1] * lr - dco[r, 3] * (rel / Lg)) * dco[r, 2]
-                    else:
-                        dl = -(L - dco[r, 0]) * dco[r, 2]
-                    if xpbd:
-                        d_lam[r] = lr + dl
-                    scale = dl / Lg
-                    wa, wb = P[pa, 6], P[pb, 6]
-                    d0 *= scale
-                    d1 *= scale
-                    P[pa, 0] += wa * d0
-                    P[pb, 0] -= wb * d0
-                    P[pa, 1] += wa * d1
-                    P[pb, 1] -= wb * d1
-                    if three:
-                        d2 *= scale
-                        P[pa, 2] += wa * d2
-                        P[pb, 2] -= wb * d2
-            else:  # linear rows, C = sum_k c_k x_{idx_k} - offset, each coordinate on its own
+                    _distance_row(P, ij, dco, d_lam, r, True, True, True)
+            elif form == 0 and three and xpbd:
                 for r in prange(start, stop):
-                    for e in range(dim):
-                        C = 0.0
-                        for k in range(width):
-                            C += c[r, k] * P[idx[r, k], e]
-                        C -= offset[r, e]
-                        lr = l_lam[e, r]
-                        if xpbd:
-                            res = -C - lco[r, 0] * lr
-                            if damped:
-                                Cn = 0.0
-                                for k in range(width):
-                                    Cn += c[r, k] * P[idx[r, k], 3 + e]
-                                res -= lco[r, 2] * (C + offset[r, e] - Cn)  # gamma (C(x) - C(x_n))
-                            dl = res * lco[r, 1]
-                            l_lam[e, r] = lr + dl
-                        else:
-                            dl = -C * lco[r, 1]
-                        for k in range(width):
-                            P[idx[r, k], e] += wc[r, k] * dl
+                    _distance_row(P, ij, dco, d_lam, r, True, True, False)
+            elif form == 0:
+                for r in prange(start, stop):
+                    _distance_row(P, ij, dco, d_lam, r, three, xpbd, damped)
+            elif three and width == 3 and xpbd and not damped:  # linear rows: isometric bending in 3D, on its own
+                for r in prange(start, stop):
+                    _linear_row(P, idx, c, wc, offset, lco, l_lam, r, 3, 3, True, False)
+            else:
+                for r in prange(start, stop):
+                    _linear_row(P, idx, c, wc, offset, lco, l_lam, r, dim, width, xpbd, damped)
     for e in range(dim):
         for p in prange(n):
             x[e, p] = P[p, e]
