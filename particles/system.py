@@ -515,7 +515,9 @@ class ParticleSystem:
             state, add or remove particles (:meth:`add_particles`,
             :meth:`remove_particles`: births and deaths of an effect) or
             replace the state (:meth:`set_state`); the next step starts from
-            the system as the hooks leave it. Never assign ``system.X``.
+            the system as the hooks leave it. Never assign ``system.X``. (The
+            compiled step's states stay in its C-ordered rows between steps,
+            :mod:`particles.backends`; the run ends in Fortran order.)
         record : callable, optional
             ``record(system) -> frame``, called at every recorded time
             instead of copying the state; the run then returns the frames in
@@ -581,7 +583,10 @@ class ParticleSystem:
             return t, X
 
         def after_step(X, t0, t1):
-            self.X, self.t = np.asfortranarray(X), float(t1)  # the hooks see the system at the step's end
+            # the hooks see the system at the step's end; the compiled step's C-ordered rows are kept as they
+            # are between steps (its next step reads them in place), any other state in Fortran order
+            self.X = X if X.flags.c_contiguous and X.dtype == np.float64 else np.asfortranarray(X)
+            self.t = float(t1)
             for hook in hooks:  # a loop over the few hooks
                 hook(self, t0)
             return self.X
@@ -589,6 +594,7 @@ class ParticleSystem:
         frame = None if record is None else (lambda X, t: record(self))
         t, X = integrate(rhs, self.X, self.t, t_end, h, method=step, every=every, blowup=blowup,
                          after_step=after_step, record=frame, **options)
+        self.X = np.asfortranarray(self.X)  # the run's end state in Fortran order (see the class Notes)
         return t, X
 
     def set_state(self, X=None, t=None):

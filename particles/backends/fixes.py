@@ -63,7 +63,8 @@ def provot(constraint, X, h):
 
     The passes of :func:`particles.constraints.provot_projection` (Jacobi
     with averaging, or Gauss-Seidel over the colour groups), each pass a
-    compiled strain pass and a compiled correction.
+    compiled strain pass and a compiled correction; a step whose springs
+    all hold costs one strain pass.
     """
     n, _, d = X.shape
     store = _springs(constraint, n)
@@ -72,7 +73,6 @@ def provot(constraint, X, h):
     limit = 1.0 + constraint.max_strain
     stop = constraint.max_strain + constraint.tol + 1e-12  # particles.constraints._ROUNDING
     x0 = _buffer(store, "x0", (n, d))
-    pick(provot_start, n)(X, x0)
     bworst = _buffer(store, "worst", (max(1, min(STRAIN_BLOCKS, s // 1024)),))
     jacobi = store["groups"] is None
     c = _buffer(store, "c", (s, d) if jacobi else (0, d))
@@ -84,12 +84,15 @@ def provot(constraint, X, h):
         worst = largest(bworst)
         if worst <= stop or passes == constraint.iterations:
             break
+        if passes == 0:  # the positions before the first correction (no pass: nothing moves)
+            pick(provot_start, n)(X, x0)
         if jacobi:
             pick(provot_average, s)(X, c, too, wi, wj, store["free"], *store["incidence"])
         else:
             for g in store["groups"]:  # Gauss-Seidel: one colour at a time
                 pick(provot_group, len(g))(X, g, i, j, L0, wi, wj, movable, limit)
-    pick(provot_end, n)(X, x0, float(h))
+    if passes:
+        pick(provot_end, n)(X, x0, float(h))
     return float(worst), passes
 
 

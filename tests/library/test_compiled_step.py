@@ -329,3 +329,23 @@ def test_a_state_still_held_is_never_reused():
         del first, view
         again = f.symplectic_euler(X, 0.0, H)
         np.testing.assert_array_equal(again, kept)
+
+
+def test_hooks_see_the_compiled_rows_and_the_run_ends_in_fortran_order():
+    """With hooks (Collider.run), the compiled step's states are not converted between steps; the end state is."""
+    from particles.collisions import Collider, Sphere
+
+    def run(backend):
+        system = _shaken(cloth(10, 10, plane="horizontal", pins=None, origin=(-0.5, -0.5, 0.0), kd=0.05))
+        seen = []
+        with backends.using(backend):
+            collider = Collider(Sphere([0.0, 0.0, -0.3], 0.29), restitution=0.0, friction=0.2)
+            step = collider.stepper("symplectic_euler", m=system.m, pinned=system.pinned)
+            system.run(20 * H, H, method=step, between_steps=lambda s, t0: seen.append(s.X.flags.c_contiguous))
+        return system, seen
+
+    compiled_system, seen = run("numba")
+    assert all(seen) and compiled_system.X.flags.f_contiguous
+    numpy_system, seen = run("numpy")
+    assert not any(seen) and numpy_system.X.flags.f_contiguous
+    _close(numpy_system.X, compiled_system.X)
