@@ -451,6 +451,10 @@ class Collider:
 
         Collisions come last, so that no free particle ends a step inside the
         solid. The contacts of the latest step are kept in ``step.contacts``.
+        When the collider's backend resolves to numba and the surface is a
+        primitive, the fix is compiled (:func:`particles.backends.fixes.collide`):
+        the same contacts and end states as :meth:`collide`, to the bit, the
+        step's end state corrected in place.
 
         Parameters
         ----------
