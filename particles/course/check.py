@@ -14,6 +14,10 @@ your code stops that process, not your kernel.
 """
 
 import html
+import importlib.util
+import os
+import re
+import sys
 import tempfile
 from pathlib import Path
 
@@ -21,7 +25,23 @@ import nbformat
 
 from .paths import exercise_tests, project_root
 
-__all__ = ["check", "CheckResult"]
+__all__ = ["check", "CheckResult", "CheckError"]
+
+_UNWRITTEN = re.compile(r"`(\w+)`,? (?:which )?is not implemented yet")
+
+
+class CheckError(RuntimeError):
+    """The public tests could not run, so no verdict is given: the message says why and what to do."""
+
+
+def _unwritten(tests):
+    """Functions the failures name as not implemented yet, in the order the tests meet them."""
+    names = []
+    for t in tests:
+        for name in _UNWRITTEN.findall("" if t.passed else (t.reason or "")):
+            if name not in names:
+                names.append(name)
+    return names
 
 
 class CheckResult:
@@ -39,18 +59,35 @@ class CheckResult:
         One record per public test: ``name``, ``points``, ``passed``, ``reason``
         and, when the test drew some, ``figures``.
     notes : list of str
-        Remarks from loading your code (errors at definition time, syntax errors).
+        Remarks from loading your code (errors at definition time, syntax errors)
+        and the count of your written answers.
+    unwritten : list of str
+        The functions the tests found still raising ``NotImplementedError``.
+    written_answers : dict or None
+        ``{"asked": N, "answered": k, "blank": [question numbers]}``, counted in
+        the saved notebook.
     """
 
-    def __init__(self, exercise, tests, notes, source):
+    def __init__(self, exercise, tests, notes, source, written_answers=None):
         self.exercise, self.tests, self.notes, self.source = exercise, tests, notes, source
         self.score = sum(t.score for t in tests)
         self.max_score = sum(t.points for t in tests)
+        self.unwritten = _unwritten(tests)
+        self.written_answers = written_answers
+
+    def _summary(self):
+        """The closing lines: what is left to write, or that every public test passes."""
+        lines = []
+        if self.unwritten:
+            lines.append("Not implemented yet: " + ", ".join(f"`{n}`" for n in self.unwritten) + ".")
+        if self.passed:
+            lines.append("All public tests pass. The autograder adds hidden tests with random parameters.")
+        return lines
 
     @property
     def passed(self):
-        """True when every public test passed."""
-        return all(t.passed for t in self.tests)
+        """True when there are public tests and every one passed."""
+        return bool(self.tests) and all(t.passed for t in self.tests)
 
     def __str__(self):
         lines = [f"{self.exercise}: {self.score:g} / {self.max_score:g} points on the public tests "
@@ -60,9 +97,7 @@ class CheckResult:
             if not t.passed:
                 lines.append(f"        {t.reason}")
         lines += [f"  note: {n}" for n in self.notes]
-        if self.passed:
-            lines.append("All public tests pass. The autograder adds hidden tests with random parameters.")
-        return "\n".join(lines)
+        return "\n".join(lines + self._summary())
 
     __repr__ = __str__
 
@@ -73,9 +108,7 @@ class CheckResult:
             reason = "" if t.passed else t.reason.replace("|", "\\|")
             rows.append(f"| {'✅' if t.passed else '❌'} | {t.name} | {reason} |")
         rows += [""] + [f"- {n}" for n in self.notes]
-        if self.passed:
-            rows.append("All public tests pass. The autograder adds hidden tests with random parameters.")
-        return "\n".join(rows)
+        return "\n".join(rows + [""] + self._summary())
 
 
     def _repr_html_(self):
@@ -100,8 +133,7 @@ class CheckResult:
         rows.append("</tbody></table>")
         if self.notes:
             rows.append("<ul>" + "".join(f"<li>{e(n)}</li>" for n in self.notes) + "</ul>")
-        if self.passed:
-            rows.append("<p>All public tests pass. The autograder adds hidden tests with random parameters.</p>")
+        rows += [f"<p>{e(line)}</p>" for line in self._summary()]
         return "\n".join(rows)
 
 
@@ -117,13 +149,66 @@ def _kernel_cells():
     return [(f"In [{k}]", source) for k, source in enumerate(history) if k and source.strip()]
 
 
+def _saved_notebook(exercise):
+    """The file of the notebook this kernel runs, when it can be told; else None.
+
+    VS Code sets ``__vsc_ipynb_file__``, Jupyter Server ``__session__`` and
+    ``JPY_SESSION_NAME``; failing those, ``NN_topic.ipynb`` in the current folder.
+    """
+    candidates = []
+    try:
+        from IPython import get_ipython
+
+        shell = get_ipython()
+        namespace = shell.user_ns if shell is not None else {}
+    except ImportError:
+        namespace = {}
+    candidates += [namespace.get("__vsc_ipynb_file__"), namespace.get("__session__"),
+                   os.environ.get("JPY_SESSION_NAME"), Path.cwd() / f"{exercise}.ipynb"]
+    for candidate in candidates:
+        if candidate and str(candidate).endswith(".ipynb") and Path(candidate).is_file():
+            return Path(candidate)
+    return None
+
+
+def _needs_pytest():
+    """A CheckError saying how to install pytest into this very Python, or None when it is there."""
+    if importlib.util.find_spec("pytest") is not None:
+        return None
+    return CheckError(
+        "particles.check runs the public tests with pytest, which is not installed in the Python this "
+        f"notebook runs ({sys.executable}). Install it there, in a cell: `%pip install pytest`, or in a "
+        f"terminal: `{sys.executable} -m pip install pytest` (or reinstall the course: "
+        "`pip install -e .` in its folder, which brings pytest). No test has run: nothing was checked.")
+
+
 def check(exercise, notebook=None, *, time_limit=None, root=None):
-    """Run the public tests of `exercise` on your current code, in a separate process.
+    """Run the public tests of an exercise on your code and show what to fix.
+
+    Call it in the last cell of an exercise notebook, ``particles.check("03_provot")``.
+    The public tests are the autograder's tests with fixed, readable inputs;
+    the autograder adds hidden ones with random inputs, so passing here is
+    necessary, not sufficient.
+
+    What is checked? By default the code you ran in this kernel, in the order
+    you ran it (so run your cells first; you need not save). With
+    ``notebook="03_provot.ipynb"`` the saved file is checked instead, which is
+    exactly what you hand in. Either way your code runs in a separate process
+    under the autograder's rules: a function of the library that the exercise
+    asks you to write yourself raises ``PermissionError`` when your code uses
+    it (the cells the course gives you may use it), and an endless loop is
+    stopped after `time_limit` seconds.
+
+    What you get: one line per test (PASS, or FAIL with what to fix), the
+    functions still ``NotImplementedError`` ("Not implemented yet: ..."), the
+    written answers found in the saved notebook ("Written answers: 1 of 3
+    filled in; not written yet: questions 2, 3": save to update it), and the
+    tests marked as stretch goals, which score nothing.
 
     Parameters
     ----------
     exercise : str
-        The exercise, e.g. ``"00_warmup"``.
+        The exercise, e.g. ``"00_warmup"`` (the notebook's file name without ``.ipynb``).
     notebook : path, optional
         Check this saved notebook instead of the code run in the current
         kernel (required outside Jupyter/IPython).
@@ -135,20 +220,29 @@ def check(exercise, notebook=None, *, time_limit=None, root=None):
     Returns
     -------
     CheckResult
-        Displays as a table in a notebook; ``.passed`` is True when all
-        public tests pass.
+        Shown as a table in a notebook; ``.passed`` is True when every public
+        test passed, ``.score`` and ``.max_score`` are the public points,
+        ``.unwritten`` the functions not implemented yet.
 
     Raises
     ------
     ValueError
         For an unknown exercise, or when there is no kernel and no `notebook`.
+    CheckError
+        When the tests cannot run (pytest missing, no test collected): the
+        message says what to do. The check never reports a pass it did not test.
     """
+    from .discovery import written_answers
     from .grading import Unit, grade_unit
 
     root = Path(root) if root else project_root()
     tests = exercise_tests(root)
     if exercise not in tests:
         raise ValueError(f"unknown exercise {exercise!r}; expected one of {', '.join(map(repr, tests))}")
+    problem = _needs_pytest()
+    if problem is not None:
+        raise problem
+    saved = None
     with tempfile.TemporaryDirectory(prefix="particles-check-") as tmp:
         if notebook is None:
             cells = _kernel_cells()
@@ -160,14 +254,33 @@ def check(exercise, notebook=None, *, time_limit=None, root=None):
             nbformat.write(nb, str(path))
             source = "the code run in this kernel"
             labels = {f"code cell {k}": label for k, (label, _) in enumerate(cells, start=1)}
+            saved = _saved_notebook(exercise)
         else:
             path, source, labels = Path(notebook), f"the saved notebook {notebook}", {}
         result = grade_unit(Unit("you", exercise, path), root, public_only=True, time_limit=time_limit)
     records = result.tests
+    if not records:
+        raise CheckError(
+            f"no public test of {exercise} ran (pytest status {result.grader_status}), so nothing was checked. "
+            f"Run `{sys.executable} -m pytest {tests[exercise]}` in a terminal to see why"
+            + (f"; the grader said: {'; '.join(result.notes)}" if result.notes else "."))
     for record in records:  # speak of "In [5]" rather than the temporary notebook's cell numbers
         for cell, label in sorted(labels.items(), key=lambda kv: -len(kv[0])):
             record.reason = record.reason.replace(cell, label)
     notes = list(result.notes)
+    written = result.written_answers
+    if notebook is None:  # the kernel's cells hold no answers: count them in the saved file
+        notes = [n for n in notes if not n.startswith("Written answers:")]
+        written = written_answers(saved, root, exercise) if saved is not None else None
+        if written and written["asked"]:
+            blank = written.get("blank") or []
+            notes.append(f"Written answers: {written['answered']} of {written['asked']} filled in"
+                         + (f"; not written yet: question{'s' if len(blank) > 1 else ''} "
+                            f"{', '.join(map(str, blank))}" if blank else "")
+                         + f" (counted in the saved {saved.name}: save to update)")
+        elif saved is None:
+            notes.append("Written answers: not counted (the saved notebook was not found; "
+                         f"check(\"{exercise}\", notebook=\"{exercise}.ipynb\") counts them)")
     for cell, label in sorted(labels.items(), key=lambda kv: -len(kv[0])):
         notes = [n.replace(cell, label) for n in notes]
-    return CheckResult(exercise, records, notes, source)
+    return CheckResult(exercise, records, notes, source, written)

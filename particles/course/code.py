@@ -75,6 +75,7 @@ class Chunk:
     label: str
     line: int
     source: str
+    provided: bool = False  # from a cell the course provides, unchanged (see SubmissionCode.from_cells)
 
 
 @dataclass
@@ -226,13 +227,31 @@ class SubmissionCode:
     _statements: list = field(default_factory=list, repr=False)
     _binders: dict = field(default_factory=dict, repr=False)
     _cache: dict = field(default_factory=dict, repr=False)
+    provided_labels: set = field(default_factory=set)
 
     @classmethod
-    def from_cells(cls, cells):
-        """Analyse ``(label, source)`` pairs, in notebook order."""
+    def from_cells(cls, cells, provided=()):
+        """Analyse ``(label, source)`` pairs, in notebook order.
+
+        Parameters
+        ----------
+        cells : list of (str, str)
+            Labels and sources of the code cells.
+        provided : iterable of str, optional
+            Sources of the cells the course provides (see
+            :func:`particles.course.release.provided_cells`). A cell whose
+            source is one of them, up to trailing white space, is the course's:
+            its statements may use what the exercise forbids, and its errors
+            are not the student's (:meth:`student_load_errors`). A cell the
+            student changed is the student's.
+        """
         code = cls()
+        given = {normalized_source(p) for p in provided}
         statements = []
+        code.provided_labels = set()
         for label, source in cells:
+            if given and normalized_source(source) in given:
+                code.provided_labels.add(label)
             _read_cell(label, source, 0, statements, code.syntax_errors)
         aliases = {}
         for s in statements:
@@ -245,7 +264,7 @@ class SubmissionCode:
                 code.skipped.append(Skipped(s.label, s.line, s.text, s.reason, tuple(sorted(s.binds | s.updates)),
                                             s.advice))
                 continue
-            code.chunks.append(Chunk(s.label, s.line, s.source))
+            code.chunks.append(Chunk(s.label, s.line, s.source, s.label in code.provided_labels))
             code._statements.append(s)
             for name in s.binds | s.updates:
                 code._binders.setdefault(name, []).append(s)
@@ -289,6 +308,28 @@ class SubmissionCode:
             self._cache[key] = forbidden_uses(self, name, forbidden)
         return list(self._cache[key])
 
+    def student_load_errors(self, load_errors):
+        """The load errors the student caused: those of the course's cells that only follow from others dropped.
+
+        A provided cell that calls a function still unwritten raises
+        ``NotImplementedError``; one that reads a name an earlier failure
+        left unbound raises ``NameError``. Neither is the student's mistake
+        (the unwritten functions are reported by the tests). Any other error
+        of a provided cell is kept: the student's code made it fail.
+        """
+        bound = set(self._binders)
+        kept = []
+        for error in load_errors:
+            if error.get("label") in self.provided_labels:
+                if error.get("type") == "NotImplementedError":
+                    continue
+                message = str(error.get("message", ""))
+                if error.get("type") == "NameError" and message.count("'") >= 2 and (
+                        message.split("'")[1] in bound or any(e is not error for e in load_errors)):
+                    continue
+            kept.append(error)
+        return kept
+
     def explain_missing(self, name, load_errors=()):
         """Why `name` is missing in the worker although the notebook binds it, as a clause; None if it does not.
 
@@ -321,6 +362,11 @@ class SubmissionCode:
         advice = skip.advice or f"define `{name}` with `def`"
         return (f"the grader skipped `{skip.text}` ({skip.label}, line {skip.line}) because it is {skip.reason}; "
                 f"{advice}")
+
+
+def normalized_source(source):
+    """A cell's source without trailing white space on its lines and around it (how cells are compared)."""
+    return "\n".join(line.rstrip() for line in str(source).strip().split("\n"))
 
 
 def read_submission(path):

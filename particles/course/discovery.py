@@ -19,9 +19,9 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from .release import ANSWER_PROMPT
+from .answers import count_answers
 
-__all__ = ["Unit", "find_submissions", "written_answers", "notebook_digest"]
+__all__ = ["Unit", "find_submissions", "written_answers", "released_exercise", "notebook_digest"]
 
 
 @dataclass
@@ -101,26 +101,37 @@ def find_submissions(paths, exercises, exercise=None):
     return list(chosen.values()), problems
 
 
-def _answer_prompts(notebook):
-    """Markdown cells of a notebook that still hold the release's answer prompt (0 if unreadable)."""
+def released_exercise(root, exercise):
+    """The released notebook of `exercise` as a dict: generated from its master when there is one.
+
+    Returns None when neither ``solutions/NN_topic.ipynb`` nor
+    ``exercises/NN_topic.ipynb`` can be read.
+    """
+    from .release import ReleaseError, _master, release_notebook
+
+    root = Path(root)
+    master = root / "solutions" / f"{exercise}.ipynb"
     try:
-        cells = json.loads(Path(notebook).read_text(encoding="utf-8")).get("cells", [])
-        sources = ["".join(c.get("source", "")) if isinstance(c.get("source"), list) else str(c.get("source", ""))
-                   for c in cells if isinstance(c, dict) and c.get("cell_type") == "markdown"]
-    except (OSError, UnicodeDecodeError, ValueError, AttributeError, TypeError):
-        return 0
-    return sum(source.count(ANSWER_PROMPT) for source in sources)
+        if master.exists():
+            return json.loads(json.dumps(release_notebook(_master(master), exercise)))
+        return json.loads((root / "exercises" / f"{exercise}.ipynb").read_text(encoding="utf-8"))
+    except (ReleaseError, OSError, UnicodeDecodeError, ValueError):
+        return None
 
 
 def written_answers(notebook, root, exercise):
-    """The written (hand-graded) answers of a submission: ``{"asked": M, "answered": k}``.
+    """The written (hand-graded) answers of a submission: ``{"asked": N, "answered": k, "blank": [...]}``.
 
-    ``asked`` counts the answer prompts of the released ``exercises/NN_topic.ipynb``;
-    a prompt still present in the submission is unanswered. The autograder does
-    not score these answers: the count tells the instructor what is left to read.
+    One answer slot per question of the released exercise
+    (:func:`particles.course.answers.count_answers`): a slot left with its
+    prompt, white space or nothing is blank. The autograder does not score
+    these answers: the count tells the student and the instructor what is
+    left to write and to read.
     """
-    asked = _answer_prompts(Path(root) / "exercises" / f"{exercise}.ipynb")
-    return {"asked": asked, "answered": max(asked - _answer_prompts(notebook), 0)}
+    released = released_exercise(root, exercise)
+    if released is None:
+        return {"asked": 0, "answered": 0, "blank": []}
+    return count_answers(notebook, released)
 
 
 def notebook_digest(path):

@@ -111,7 +111,7 @@ def forbidden_uses(code, name, forbidden):
                 alias = dotted(node.value)  # `I = particles.integrators`, `step = euler`
                 head, _, tail = alias.partition(".")
                 resolve(head, ("." + tail if tail else "") + rest, p.index, via, depth + 1)
-            elif p not in seen:
+            elif p not in seen and p.label not in code.provided_labels:  # the course's own cells may
                 seen.add(p)
                 queue.append((p, via + [root]))
 

@@ -146,8 +146,11 @@ def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None):
                      "after a timeout or a crash")
     written = written_answers(unit.notebook, root, unit.exercise) if root is not None else None
     if written and written["asked"]:
-        notes.append(f"Written answers: {written['answered']} of {written['asked']} filled in; they are read "
-                     "and graded by your instructor, not by the autograder")
+        blank = written.get("blank") or []
+        missing = f"; not written yet: question{'s' if len(blank) > 1 else ''} {', '.join(map(str, blank))}" \
+            if blank else ""
+        notes.append(f"Written answers: {written['answered']} of {written['asked']} filled in{missing}; they are "
+                     "read and graded by your instructor, not by the autograder")
     layers = session.isolation or {}
     return SubmissionRecord(
         student=unit.student, exercise=unit.exercise, notebook=str(unit.notebook), seed=seed,

@@ -72,6 +72,7 @@ from .isolation import Plan, protect_this_process
 from .signing import TOKEN_FD, sign_records
 from .paths import project_root
 from .records import SessionRecord, TestRecord
+from .release import provided_cells
 from .limits import check_limit
 from .runner import GradingFailure, Submission
 
@@ -208,7 +209,7 @@ def _particles_submission(request, _particles_job):
             deny.append(Path(config.getoption(option)).resolve().parent)
     start = time.perf_counter()
     try:
-        code = SubmissionCode.from_cells(notebook_cells(path))
+        code = SubmissionCode.from_cells(notebook_cells(path), provided=provided_cells(root, exercise))
         problem = None
     except ValueError as error:
         code, problem = SubmissionCode(), f"your notebook could not be read: {error}"
@@ -225,7 +226,7 @@ def _particles_submission(request, _particles_job):
     yield submission
     submission.close()
     result.restarts = submission.restarts
-    result.load_errors = list(submission.load_errors)
+    result.load_errors = submission.code.student_load_errors(submission.load_errors)
     result.skipped = [{"label": s.label, "line": s.line, "text": s.text, "reason": s.reason}
                       for s in submission.code.skipped]
     result.syntax_errors = [list(e) for e in submission.code.syntax_errors]

@@ -144,7 +144,8 @@ class Submission:
             shutil.rmtree(scratch, ignore_errors=True)
         self.worker = Worker(scratch, config, python=self.python, isolation=self.plan)
         self.layers = dict(self.worker.layers)
-        chunks = [{"label": c.label, "line": c.line, "source": c.source} for c in self.code.chunks]
+        chunks = [{"label": c.label, "line": c.line, "source": c.source, "provided": c.provided}
+                  for c in self.code.chunks]
         limit = float(self.limits["load_time_limit"])
         try:
             # each statement has its own alarm in the worker; this deadline is the backstop for one that

@@ -68,11 +68,12 @@ def test_solutions_become_stubs_and_prompts():
     secret = nbformat.v4.new_code_cell("### INSTRUCTOR ONLY\nassert f(2) == 4")
     tagged = nbformat.v4.new_code_cell("x = 1", metadata={"tags": ["instructor-only"]})
     out = release_notebook(_master(code, answer, secret, tagged), "07_test")
-    assert len(out.cells) == 2
+    assert len(out.cells) == 3
     assert out.cells[0].source == ('def f(x):\n    """Doc."""\n    # YOUR CODE HERE\n'
                                    '    raise NotImplementedError("f is not written yet")')
     assert out.cells[0].outputs == [] and out.cells[0].execution_count is None
-    assert out.cells[1].source == "Why?\n\n*Your answer here.*"
+    assert out.cells[1].source == "Why?"  # the question, then its answer slot
+    assert out.cells[2].source == "*Your answer here.*" and out.cells[2].metadata == {"particles": {"answer": 1}}
     assert out.metadata["particles"]["exercise"] == "07_test"
 
 

@@ -39,6 +39,14 @@ def _run(path, allow_errors=False):
     return nb
 
 
+def _questions(master):
+    """The written questions of a master: one answer slot each in the released notebook."""
+    from particles.course.answers import answer_slots
+    from particles.course.release import release_notebook
+
+    return len(answer_slots(release_notebook(nbformat.read(master, as_version=4), master.stem)))
+
+
 def _errors(nb):
     return [(k, o["ename"]) for k, c in enumerate(nb.cells) if c.cell_type == "code"
             for o in c.get("outputs", []) if o.get("output_type") == "error"]
@@ -89,6 +97,10 @@ def test_master_runs_clean(path):
     last = "".join(o.get("data", {}).get("text/plain", "") + o.get("text", "")
                    for o in nb.cells[-1].get("outputs", []))
     assert "points on the public tests" in last and "All public tests pass" in last, last
+    assert "While loading" not in last and "Not implemented yet" not in last, last
+    asked = _questions(path)
+    if asked:
+        assert f"Written answers: {asked} of {asked} filled in" in last, last
 
 
 @pytest.mark.parametrize("path", EXERCISES, ids=[p.name for p in EXERCISES])
@@ -100,4 +112,8 @@ def test_released_exercise_runs_up_to_the_stubs(path):
     first_code = [k for k, c in enumerate(nb.cells) if c.cell_type == "code"][0]
     assert all(k > first_code for k, _ in errors)
     check = "".join(o.get("data", {}).get("text/plain", "") for o in nb.cells[-1].get("outputs", []))
-    assert re.search(r"\b0 / \d+ points on the public tests", check) and "not implemented yet" in check, check
+    assert re.search(r"\b0 / \d+ points on the public tests", check) and "Not implemented yet:" in check, check
+    assert "While loading" not in check and "All public tests pass" not in check, check
+    asked = _questions(ROOT / "solutions" / path.name)
+    if asked:
+        assert f"Written answers: 0 of {asked} filled in" in check, check
