@@ -39,11 +39,59 @@ from .integrators import INTEGRATORS, integrate
 from .system import ParticleSystem
 
 
-def check(exercise, notebook=None, **options):
-    """Run the public tests of `exercise` on your current notebook code (see :func:`particles.course.check.check`)."""
+def check(exercise, notebook=None, *, time_limit=None, root=None):
+    """Run the public tests of an exercise on your code and show what to fix.
+
+    Put ``particles.check("03_provot")`` in the last cell of an exercise
+    notebook and run it after your own cells. The public tests are the
+    autograder's tests with fixed, readable inputs; the autograder adds hidden
+    tests with random inputs, so a pass here is necessary, not sufficient.
+
+    What is checked: by default the code you ran in this kernel, in the order
+    you ran it (you need not save). With ``notebook="03_provot.ipynb"``, the
+    saved file, which is exactly what you hand in. Your code runs in a
+    separate process under the autograder's rules: using a library function
+    that the exercise asks you to write raises ``PermissionError`` (the cells
+    the course gives you may use it), and a call that takes longer than
+    `time_limit` seconds is stopped.
+
+    What you see: one line per test, PASS or FAIL with what to fix; the
+    functions still raising ``NotImplementedError`` ("Not implemented yet:");
+    your written answers counted in the saved notebook ("Written answers: 1 of
+    3 filled in; not written yet: questions 2, 3"; save to update; they are
+    graded by your instructor); tests marked as stretch goals, which score
+    nothing. If the tests cannot run at all (pytest missing), you get an
+    error that says how to fix it, never a pass.
+
+    Parameters
+    ----------
+    exercise : str
+        The notebook's name without ``.ipynb``, e.g. ``"00_warmup"``.
+    notebook : str or path, optional
+        Check this saved notebook instead of the code run in this kernel
+        (required outside Jupyter).
+    time_limit : float, optional
+        Seconds each call of your functions may take (default: the exercise's).
+    root : str or path, optional
+        The course folder (default: found from the current folder).
+
+    Returns
+    -------
+    CheckResult
+        Shown as a table in the notebook; ``.passed``, ``.score``,
+        ``.max_score``, ``.unwritten`` (functions not implemented yet),
+        ``.written_answers``.
+
+    Raises
+    ------
+    ValueError
+        An unknown exercise, or no notebook outside Jupyter.
+    particles.course.check.CheckError
+        The tests could not run; the message says what to do.
+    """
     from .course.check import check as _check
 
-    return _check(exercise, notebook, **options)
+    return _check(exercise, notebook, time_limit=time_limit, root=root)
 
 
 __version__ = "0.1.0"
