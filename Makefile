@@ -31,8 +31,14 @@ $(VENV)/.installed-lab: pyproject.toml | $(BIN)/python
 demo: $(VENV)/.installed
 	$(BIN)/particles tour --out $(OUT)
 
+# System tools the tests need (headless Chromium for the course-site tests), installed once, here,
+# before any test runs: never by test workers racing for the package manager's lock
+$(VENV)/.system-tools: .ci/install-system-tools | $(BIN)/python
+	sh .ci/install-system-tools
+	touch $@
+
 # two workers (pytest-xdist), a test file per worker at a time: module fixtures (a graded corpus) run once
-test: $(VENV)/.installed-dev
+test: $(VENV)/.installed-dev $(VENV)/.system-tools
 	$(BIN)/python -m pytest -n 2 --dist loadfile
 
 lab: $(VENV)/.installed-lab

@@ -1,4 +1,4 @@
-"""Headless Chromium for the tests: found on the machine, or installed from Debian's packages.
+"""Headless Chromium for the tests, found on the machine (``make test`` installs it first).
 
 :func:`load` dumps a page's DOM after its scripts ran; :class:`Browser` drives Chromium through the
 DevTools protocol on a pipe, logs every request and can cut the network off, for pages that must
@@ -23,25 +23,20 @@ CANDIDATES = ("chromium", "chromium-browser", "google-chrome")
 
 
 def find_or_install_chromium():
-    """Path of a Chromium executable; installs Debian's chromium when missing (root, apt).
+    """Path of a Chromium executable found on the machine.
 
-    Outside CI a missing browser that cannot be installed skips the test;
-    in CI (CI=true) it fails it, so that the check is never silently lost.
+    The browser is installed by ``make test``'s set-up step
+    (``.ci/install-system-tools``), once, before any test runs: never here,
+    where two test workers would race for the package manager's lock. A
+    missing browser skips the test, or fails it in CI (``CI=true``), so that
+    the check is never silently lost.
     """
     for name in CANDIDATES:
         path = shutil.which(name)
         if path:
             return path
-    if shutil.which("apt-get") and os.geteuid() == 0:
-        env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
-        for command in (["apt-get", "install", "-y", "-q", "chromium"],
-                        ["sh", "-c", "apt-get update -q && apt-get install -y -q chromium"]):
-            if subprocess.run(command, env=env, capture_output=True).returncode == 0:
-                break
-        path = shutil.which("chromium")
-        if path:
-            return path
-    message = "headless Chromium is not installed and could not be installed with apt-get"
+    message = ("headless Chromium is not installed: run `sh .ci/install-system-tools` (make test does) "
+               "or install chromium")
     if os.environ.get("CI"):
         pytest.fail(message)
     pytest.skip(message)
