@@ -1,7 +1,7 @@
 # The two commands of the README, each bootstrapping .venv itself:
 #   make demo   the course tour: figures, animations and tables into out/
 #   make test   the whole test suite
-# and `make lab` to open the lectures in Jupyter Lab.
+# and `make lab` to open the course folder (lectures/ and exercises/) in Jupyter Lab.
 
 PYTHON ?= python3
 VENV   := .venv
@@ -42,7 +42,7 @@ test: $(VENV)/.installed-dev $(VENV)/.system-tools
 	$(BIN)/python -m pytest -n 2 --dist loadfile
 
 lab: $(VENV)/.installed-lab
-	$(BIN)/jupyter lab lectures/
+	$(BIN)/jupyter lab .
 
 bench: $(VENV)/.installed
 	for b in bench/bench_*.py; do $(BIN)/python $$b || exit 1; done

@@ -28,7 +28,7 @@ EXERCISES = sorted((ROOT / "exercises").glob("*.ipynb"))
 
 FIGURES = (8, 15)  # the figures a lecture draws, at least and at most
 # lectures that draw fewer figures than that so far: strict xfails, to be removed when fixed
-FEW_FIGURES = {"01_state_and_steppers.ipynb", "03_collisions.ipynb", "05_flocks.ipynb"}
+FEW_FIGURES = set()
 
 
 def _run(path, allow_errors=False):
