@@ -1,0 +1,129 @@
+"""Whose fault is a failure: the function a test judges, or a helper of it that fails its own tests.
+
+A downstream function fails when a function it calls is wrong (``measured_order`` when ``midpoint_step``
+evaluates f at the wrong time, ``provot_project`` when ``provot_pass`` loses corrections). The tests of
+the downstream function see only its wrong result; the fix is in the helper. Two pieces say so:
+
+* :func:`helpers` reads the submission's syntax trees (nothing is run) for the functions of the notebook
+  that a function uses, directly or through other functions and constants (``STEPPERS = {"euler":
+  euler_step}``), each with the chain that leads to it;
+* :func:`blame` takes the records of one notebook's tests, each naming the function it judges
+  (``TestRecord.function``), and rewrites the reason of a failed test of B that uses a helper A whose own
+  tests failed too: "`B` calls `A`, which fails its own tests: fix `A` first; <the reason>". Of several
+  such helpers the most upstream is named (one that uses no other failing helper). A failed test of a
+  parametrized function (``test_x[midpoint]``) counts only for the tests that share a parameter with it
+  or have none, so that ``measured_order('euler')`` is not blamed on a wrong ``midpoint_step``.
+"""
+
+import ast
+
+__all__ = ["helpers", "blame", "function_of", "params_of"]
+
+
+def _is_function(code, name):
+    s = code._definition(name)
+    return s is not None and isinstance(s.node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)) or (
+        s is not None and isinstance(s.node, (ast.Assign, ast.AnnAssign)) and isinstance(s.node.value, ast.Lambda))
+
+
+def helpers(code, name):
+    """The notebook's functions that function `name` uses, directly or through other names of the notebook.
+
+    Parameters
+    ----------
+    code : particles.course.code.SubmissionCode
+    name : str
+        A top-level function of the submission.
+
+    Returns
+    -------
+    dict
+        helper name -> the chain of names from `name` to it (``["measured_order", "convergence_errors",
+        "STEPPERS", "rk4_step"]``), in the order found (nearest first); `name` itself is not in it.
+    """
+    cache = code._cache.setdefault("helpers", {})
+    if name in cache:
+        return dict(cache[name])
+    found, seen, queue = {}, {name}, [(name, [name])]
+    while queue:
+        current, chain = queue.pop(0)
+        for s in code._in_force(current):
+            for ref in s.refs:
+                if ref.imported is not None or ref.name in seen:
+                    continue
+                if not code._in_force(ref.name):
+                    continue  # a builtin, a parameter of nothing, a library name
+                seen.add(ref.name)
+                path = chain + [ref.name]
+                if _is_function(code, ref.name):
+                    found[ref.name] = path
+                if all(p.kind != "import" for p in code._in_force(ref.name)):
+                    queue.append((ref.name, path))
+    cache[name] = found
+    return dict(found)
+
+
+def params_of(test):
+    """The parameters of a test key: ``"test_x[a-b]"`` -> ``{"a", "b"}``, ``"test_x"`` -> ``set()``."""
+    if test.endswith("]") and "[" in test:
+        return set(test[test.index("[") + 1:-1].split("-"))
+    return set()
+
+
+def function_of(test, called, defined):
+    """The function a test judges: of those it called, the longest whose name is in the test's name, else the first.
+
+    Parameters
+    ----------
+    test : str
+        The test's key (``test_measured_order_circle[rk4]``).
+    called : list of str
+        The submission's functions the test called, in order.
+    defined : container of str
+        The submission's top-level names.
+    """
+    base = test.split("[", 1)[0]
+    named = [name for name in dict.fromkeys(called) if name in base]
+    if named:
+        return max(named, key=len)
+    return next((name for name in called if name in defined), "")
+
+
+def _relevant(test, other):
+    a, b = params_of(test), params_of(other)
+    return not a or not b or bool(a & b)
+
+
+def blame(records, code):
+    """Prefix the reasons of failed tests whose function uses a helper that fails its own tests (in place).
+
+    Parameters
+    ----------
+    records : list of particles.course.records.TestRecord
+        One notebook's tests, each with ``function`` set where known.
+    code : particles.course.code.SubmissionCode
+
+    Returns
+    -------
+    int
+        How many reasons were rewritten.
+    """
+    failed = {}  # function -> its failed tests (not the grader's own errors)
+    for r in records:
+        if not r.passed and not r.grader_error and r.function:
+            failed.setdefault(r.function, []).append(r.test)
+    changed = 0
+    for r in records:
+        if r.passed or r.grader_error or not r.function or r.reason.startswith(f"`{r.function}` calls `"):
+            continue
+        uses = helpers(code, r.function)
+        culprits = [a for a in uses if a != r.function and any(_relevant(r.test, t) for t in failed.get(a, []))]
+        if not culprits:
+            continue
+        roots = [a for a in culprits if not any(b in helpers(code, a) for b in culprits if b != a)] or culprits
+        a = roots[0]
+        through = [n for n in uses[a][1:-1] if _is_function(code, n)]
+        via = f" (through `{'`, `'.join(through)}`)" if through else ""
+        r.reason = f"`{r.function}` calls `{a}`{via}, which fails its own tests: fix `{a}` first; {r.reason}"
+        changed += 1
+    return changed
