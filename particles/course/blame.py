@@ -12,12 +12,17 @@ the downstream function see only its wrong result; the fix is in the helper. Two
   tests failed too: "`B` calls `A`, which fails its own tests: fix `A` first; <the reason>". Of several
   such helpers the most upstream is named (one that uses no other failing helper). A failed test of a
   parametrized function (``test_x[midpoint]``) counts only for the tests that share a parameter with it
-  or have none, so that ``measured_order('euler')`` is not blamed on a wrong ``midpoint_step``.
+  or have none, so that ``measured_order('euler')`` is not blamed on a wrong ``midpoint_step``. A
+  failure that no tested helper explains ends with the helpers of B that no test judges and that no
+  function whose tests all pass uses: "(`max_stable_step` relies on `stable_limit`, `bisect_stable` of
+  yours, which no test checks alone: the mistake may be there)". And a failure of a function that adds into
+  an array at an index array (``dx[i] += c``: NumPy keeps one addition per repeated index) says so, and
+  that np.add.at or np.bincount keep them all (:func:`scatter_hazards`).
 """
 
 import ast
 
-__all__ = ["helpers", "blame", "function_of", "params_of"]
+__all__ = ["helpers", "blame", "function_of", "params_of", "scatter_hazards"]
 
 
 def _is_function(code, name):
@@ -126,4 +131,93 @@ def blame(records, code):
         via = f" (through `{'`, `'.join(through)}`)" if through else ""
         r.reason = f"`{r.function}` calls `{a}`{via}, which fails its own tests: fix `{a}` first; {r.reason}"
         changed += 1
+    changed += _suspects(records, code)
+    changed += _scatters(records, code)
+    return changed
+
+
+def _loop_names(function):
+    """Names bound by the ``for`` loops and comprehensions of a function: scalars, one at a time."""
+    names = set()
+    for node in ast.walk(function):
+        if isinstance(node, (ast.For, ast.comprehension)):
+            names |= {n.id for n in ast.walk(node.target) if isinstance(n, ast.Name)}
+    return names
+
+
+def _array_index(index, loops):
+    """Whether a subscript's index may be an array of indices: a name no loop binds, or an expression of one."""
+    if isinstance(index, ast.Tuple):
+        return any(_array_index(e, loops) for e in index.elts)
+    if isinstance(index, (ast.Slice, ast.Constant)):
+        return False
+    names = [n.id for n in ast.walk(index) if isinstance(n, ast.Name)]
+    return bool(names) and not all(n in loops for n in names)
+
+
+def scatter_hazards(code, name):
+    """``x[i] += ...`` statements of function `name` whose index may hold repeated indices, as (label, line, text).
+
+    NumPy's ``x[i] += c`` reads ``x[i]`` once and writes it once: where ``i`` repeats, only one of the additions
+    is kept (``np.add.at(x, i, c)`` or ``np.bincount`` keep them all). An index a ``for`` loop binds is a
+    scalar and safe.
+    """
+    s = code._definition(name)
+    if s is None or not isinstance(s.node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+        return []
+    loops, found = _loop_names(s.node), []
+    for node in ast.walk(s.node):
+        if isinstance(node, ast.AugAssign) and isinstance(node.op, (ast.Add, ast.Sub)) \
+                and isinstance(node.target, ast.Subscript) and _array_index(node.target.slice, loops):
+            found.append((s.label, node.lineno, ast.unparse(node.target)))
+    return found
+
+
+def _scatters(records, code):
+    """End the reasons of failed tests whose function (or a failing helper) scatters with ``x[i] +=``."""
+    good = {}
+    for r in records:
+        if r.function:
+            good[r.function] = good.get(r.function, True) and (r.passed or r.grader_error)
+    changed = 0
+    for r in records:
+        if r.passed or r.grader_error or not r.function or "np.add.at" in r.reason or "repeated ind" in r.reason:
+            continue
+        for function in [r.function] + [a for a in helpers(code, r.function) if not good.get(a, False)]:
+            hazards = scatter_hazards(code, function)
+            if hazards:
+                label, line, target = hazards[0]
+                r.reason += (f"; `{function}` adds into `{target}` with += ({label}, line {line}): where the index "
+                             "repeats, NumPy keeps only one of the additions (lost updates at shared particles); "
+                             "scatter with np.add.at or np.bincount")
+                changed += 1
+                break
+    return changed
+
+
+def _suspects(records, code):
+    """End the reasons of failed tests, not blamed on a tested helper, with the untested helpers they rely on.
+
+    A helper no test judges (``bisect_stable`` under ``max_stable_step``) is a suspect of a failure of a
+    function that uses it, unless a function whose tests all pass uses it too (then it works, at least there).
+    """
+    judged = {}
+    for r in records:
+        if r.function:
+            judged.setdefault(r.function, []).append(r.passed or r.grader_error)
+    cleared = set()
+    for function, passes in judged.items():
+        if all(passes):
+            cleared |= set(helpers(code, function))
+    changed = 0
+    for r in records:
+        if r.passed or r.grader_error or not r.function or "which fails its own tests" in r.reason \
+                or "which no test checks alone" in r.reason:
+            continue
+        suspects = [a for a in helpers(code, r.function) if a not in judged and a not in cleared and a != r.function]
+        if suspects:
+            names = ", ".join(f"`{a}`" for a in suspects)
+            r.reason += (f" (`{r.function}` relies on {names} of yours, which no test checks alone: the mistake may "
+                         f"be there)")
+            changed += 1
     return changed

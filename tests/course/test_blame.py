@@ -69,3 +69,34 @@ def test_the_check_lists_stretch_goals_apart_and_scores_without_them():
     assert text.index("a works") < text.index("Stretch goals") < text.index("b works [rk4]")
     assert "b works [rk4] (stretch goal, not scored)" in result._repr_markdown_()
     assert "b works [rk4] (stretch goal, not scored)" in result._repr_html_()
+
+
+def test_untested_helpers_are_named_unless_a_passing_function_uses_them():
+    """A failure no tested helper explains names the untested helpers it relies on, not those a passing test covers."""
+    code = SubmissionCode.from_cells([
+        ("code cell 1", "def amplitude(X):\n    return abs(X)"),
+        ("code cell 2", "def blows_up(h):\n    return amplitude(h) > 1"),
+        ("code cell 3", "def bisect_stable(unstable, lo, hi):\n    return hi"),
+        ("code cell 4", "def max_stable_step(k):\n    return bisect_stable(blows_up, 0.0, k)"),
+    ])
+    records = [_record("test_blows_up_around_the_limits", "blows_up", passed=True),
+               _record("test_max_stable_step_one_spring", "max_stable_step", reason="returned a step that blows up")]
+    assert blame(records, code) == 1
+    assert records[1].reason == ("returned a step that blows up (`max_stable_step` relies on `bisect_stable` of "
+                                 "yours, which no test checks alone: the mistake may be there)")
+
+
+def test_a_scatter_with_repeated_indices_is_named():
+    """dx[i] += c at an index array is named on a failure (lost updates); an index a for loop binds is not."""
+    code = SubmissionCode.from_cells([
+        ("code cell 1", "import numpy as np"),
+        ("code cell 2", "def spread(x, i, c):\n    dx = np.zeros_like(x)\n    dx[i] += c\n"
+                        "    for k in range(len(i)):\n        dx[k] += c[k]\n    return dx"),
+    ])
+    from particles.course.blame import scatter_hazards
+
+    assert scatter_hazards(code, "spread") == [("code cell 2", 3, "dx[i]")]
+    records = [_record("test_spread", "spread", reason="spread(x, i, c) is off by 0.1")]
+    blame(records, code)
+    assert "`spread` adds into `dx[i]` with += (code cell 2, line 3)" in records[0].reason
+    assert "np.add.at" in records[0].reason

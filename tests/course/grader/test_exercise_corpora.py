@@ -97,6 +97,28 @@ def test_wrong_submission_is_told_its_mistake(graded, exercise, case):
     assert named, {test: tests[test]["reason"] for test in CASES[exercise][case]["fails"]}
 
 
+_NUMBER = r"(-?\d+(?:\.\d+)?)"
+
+
+@pytest.mark.parametrize("exercise", EXERCISES)
+def test_figures_and_messages_show_the_same_numbers(graded, exercise):
+    """A failed test's figure labels the student's curve with the order its message gives, never another one."""
+    disagree = {}
+    for student, (ex, case) in graded["students"].items():
+        if ex != exercise:
+            continue
+        for test in _tests(graded, exercise, case).values():
+            said = [float(x) for x in re.findall(rf"(?:with order|returned) {_NUMBER}", test["reason"])]
+            for figure in test.get("figures", []) if not test["passed"] else []:
+                for series in figure["series"]:
+                    shown = [float(x) for x in re.findall(rf"(?:slope|order|measured_order):? {_NUMBER}",
+                                                          series["label"])]
+                    if said and shown and series["label"].startswith("yours") \
+                            and not any(abs(a - b) <= 0.006 for a in said for b in shown):
+                        disagree[f"{case}: {test['test']}"] = (series["label"], test["reason"][:200])
+    assert not disagree, disagree
+
+
 @pytest.mark.parametrize("exercise", EXERCISES)
 def test_hidden_messages_never_show_random_parameters(graded, exercise):
     """No failure message of a hidden test shows a number its random generator drew, in any usual format."""
