@@ -13,8 +13,8 @@ the downstream function see only its wrong result; the fix is in the helper. Two
   such helpers the most upstream is named (one that uses no other failing helper). A failed test of a
   parametrized function (``test_x[midpoint]``) counts only for the tests that share a parameter with it
   or have none, so that ``measured_order('euler')`` is not blamed on a wrong ``midpoint_step``. A
-  failure that no tested helper explains ends with the helpers of B that no test judges and that no
-  function whose tests all pass uses: "(`max_stable_step` relies on `stable_limit`, `bisect_stable` of
+  failure that no tested helper explains ends with the student's helpers of B that no test judges (and
+  that B does not reach only through a tested helper whose tests pass): "(`max_stable_step` relies on `stable_limit`, `bisect_stable` of
   yours, which no test checks alone: the mistake may be there)". And a failure of a function that adds into
   an array at an index array (``dx[i] += c``: NumPy keeps one addition per repeated index) says so, and
   that np.add.at or np.bincount keep them all (:func:`scatter_hazards`).
@@ -22,7 +22,7 @@ the downstream function see only its wrong result; the fix is in the helper. Two
 
 import ast
 
-__all__ = ["helpers", "blame", "function_of", "params_of", "scatter_hazards"]
+__all__ = ["helpers", "blame", "function_of", "params_of", "scatter_hazards", "stub_functions"]
 
 
 def _is_function(code, name):
@@ -94,12 +94,42 @@ def function_of(test, called, defined):
     return next((name for name in called if name in defined), "")
 
 
+def _own_fault(r):
+    """Whether the reason is about the function itself: not written yet, or not defined (nothing to blame)."""
+    return r.reason.startswith((f"`{r.function}` is not implemented yet", f"`{r.function}` is not defined"))
+
+
 def _relevant(test, other):
     a, b = params_of(test), params_of(other)
     return not a or not b or bool(a & b)
 
 
-def blame(records, code):
+def stub_functions(path):
+    """The functions a released stub leaves to write (their body raises NotImplementedError), or None without one.
+
+    These are the student's own functions; the others the course provides (``chain_field``), which the
+    grader never names as suspects.
+    """
+    from .code import notebook_cells
+
+    try:
+        cells = notebook_cells(path)
+    except (OSError, ValueError):
+        return None
+    names = set()
+    for _, source in cells:
+        try:
+            tree = ast.parse(source)
+        except SyntaxError:
+            continue
+        for node in tree.body:
+            if isinstance(node, ast.FunctionDef) and any(
+                    isinstance(n, ast.Raise) and "NotImplementedError" in ast.unparse(n) for n in ast.walk(node)):
+                names.add(node.name)
+    return names
+
+
+def blame(records, code, written=None):
     """Prefix the reasons of failed tests whose function uses a helper that fails its own tests (in place).
 
     Parameters
@@ -107,6 +137,8 @@ def blame(records, code):
     records : list of particles.course.records.TestRecord
         One notebook's tests, each with ``function`` set where known.
     code : particles.course.code.SubmissionCode
+    written : set of str, optional
+        The functions the student writes (:func:`stub_functions`); only those are named as suspects.
 
     Returns
     -------
@@ -119,7 +151,8 @@ def blame(records, code):
             failed.setdefault(r.function, []).append(r.test)
     changed = 0
     for r in records:
-        if r.passed or r.grader_error or not r.function or r.reason.startswith(f"`{r.function}` calls `"):
+        if r.passed or r.grader_error or not r.function or r.reason.startswith(f"`{r.function}` calls `") \
+                or _own_fault(r):
             continue
         uses = helpers(code, r.function)
         culprits = [a for a in uses if a != r.function and any(_relevant(r.test, t) for t in failed.get(a, []))]
@@ -131,7 +164,7 @@ def blame(records, code):
         via = f" (through `{'`, `'.join(through)}`)" if through else ""
         r.reason = f"`{r.function}` calls `{a}`{via}, which fails its own tests: fix `{a}` first; {r.reason}"
         changed += 1
-    changed += _suspects(records, code)
+    changed += _suspects(records, code, written)
     changed += _scatters(records, code)
     return changed
 
@@ -174,16 +207,13 @@ def scatter_hazards(code, name):
 
 
 def _scatters(records, code):
-    """End the reasons of failed tests whose function (or a failing helper) scatters with ``x[i] +=``."""
-    good = {}
-    for r in records:
-        if r.function:
-            good[r.function] = good.get(r.function, True) and (r.passed or r.grader_error)
+    """End the reasons of failed tests whose function scatters with ``x[i] +=`` at an index array."""
     changed = 0
     for r in records:
-        if r.passed or r.grader_error or not r.function or "np.add.at" in r.reason or "repeated ind" in r.reason:
+        if r.passed or r.grader_error or not r.function or "np.add.at" in r.reason or "repeated ind" in r.reason \
+                or _own_fault(r):
             continue
-        for function in [r.function] + [a for a in helpers(code, r.function) if not good.get(a, False)]:
+        for function in [r.function]:  # its own code only: a helper may scatter over disjoint indices on purpose
             hazards = scatter_hazards(code, function)
             if hazards:
                 label, line, target = hazards[0]
@@ -195,26 +225,29 @@ def _scatters(records, code):
     return changed
 
 
-def _suspects(records, code):
+def _suspects(records, code, written=None):
     """End the reasons of failed tests, not blamed on a tested helper, with the untested helpers they rely on.
 
     A helper no test judges (``bisect_stable`` under ``max_stable_step``) is a suspect of a failure of a
-    function that uses it, unless a function whose tests all pass uses it too (then it works, at least there).
+    function that uses it, unless it is reached only through a tested helper of that function whose tests
+    all pass (``grows`` under ``blows_up``). Only the student's functions (`written`, when known) are named.
     """
     judged = {}
     for r in records:
         if r.function:
             judged.setdefault(r.function, []).append(r.passed or r.grader_error)
-    cleared = set()
-    for function, passes in judged.items():
-        if all(passes):
-            cleared |= set(helpers(code, function))
     changed = 0
     for r in records:
         if r.passed or r.grader_error or not r.function or "which fails its own tests" in r.reason \
-                or "which no test checks alone" in r.reason:
+                or "which no test checks alone" in r.reason or _own_fault(r):
             continue
-        suspects = [a for a in helpers(code, r.function) if a not in judged and a not in cleared and a != r.function]
+        uses = helpers(code, r.function)
+        cleared = set()
+        for p in uses:
+            if p in judged and all(judged[p]):
+                cleared |= set(helpers(code, p))
+        suspects = [a for a in uses if a not in judged and a not in cleared and a != r.function
+                    and (written is None or a in written)]
         if suspects:
             names = ", ".join(f"`{a}`" for a in suspects)
             r.reason += (f" (`{r.function}` relies on {names} of yours, which no test checks alone: the mistake may "

@@ -79,7 +79,7 @@ from .figures import Feedback
 from .isolation import Plan, protect_this_process
 from .signing import TOKEN_FD, sign_records
 from .paths import project_root
-from .blame import blame, function_of
+from .blame import blame, function_of, stub_functions
 from .records import SessionRecord, TestRecord
 from .limits import check_limit
 from .runner import GradingFailure, Submission
@@ -235,7 +235,8 @@ def _particles_submission(request, _particles_job):
     result.exercise, result.submission = exercise, str(path)
     yield submission
     # every test of the module has run: a failure downstream of a helper that fails its own tests names it
-    blame([t for t in result.tests if t.test in _module_tests(request)], submission.code)
+    blame([t for t in result.tests if t.test in _module_tests(request)], submission.code,
+          written=stub_functions(root / "exercises" / f"{exercise}.ipynb"))
     submission.close()
     result.restarts = submission.restarts
     result.load_errors = list(submission.load_errors)

@@ -146,8 +146,16 @@ def test_wrong_submission_is_told_the_mistake_and_the_function_that_holds_it(gra
     culprits = [spec["culprit"]] if isinstance(spec["culprit"], str) else spec["culprit"]  # a list: several wrong
     failed = {test: t["reason"] for test, t in tests.items() if not t["passed"]}
     assert failed
-    silent = {test: reason for test, reason in failed.items()
-              if not any(re.search(rf"\b{re.escape(c)}\b", reason) for c in culprits)}
+    def names(reason, seen=()):
+        """The reason names a culprit, or blames a helper (fix `A` first) whose own failures name one."""
+        if any(re.search(rf"\b{re.escape(c)}\b", reason) for c in culprits):
+            return True
+        blamed = re.match(r"`\w+` calls `(\w+)`.*?, which fails its own tests: fix `\w+` first", reason)
+        helper = blamed.group(1) if blamed else None
+        return bool(helper) and helper not in seen and any(
+            names(r, seen + (helper,)) for t, r in failed.items() if tests[t].get("function") == helper)
+
+    silent = {test: reason for test, reason in failed.items() if not names(reason)}
     assert not silent, f"these failures do not name {' or '.join(culprits)}: {silent}"
     named = [(test, phrase) for test, phrase in exercise_corpus.diagnoses(spec)
              if test in failed and exercise_corpus.names_a_mistake(phrase, failed[test])]
