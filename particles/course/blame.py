@@ -193,14 +193,17 @@ def scatter_hazards(code, name):
 
     NumPy's ``x[i] += c`` reads ``x[i]`` once and writes it once: where ``i`` repeats, only one of the additions
     is kept (``np.add.at(x, i, c)`` or ``np.bincount`` keep them all). An index a ``for`` loop binds is a
-    scalar and safe.
+    scalar and safe, and a statement inside a loop is left alone (a loop over colours, Gauss-Seidel: sets
+    of indices that share no particle, on purpose).
     """
     s = code._definition(name)
     if s is None or not isinstance(s.node, (ast.FunctionDef, ast.AsyncFunctionDef)):
         return []
     loops, found = _loop_names(s.node), []
+    in_loops = {id(n) for loop in ast.walk(s.node) if isinstance(loop, (ast.For, ast.While))
+                for stmt in loop.body for n in ast.walk(stmt)}
     for node in ast.walk(s.node):
-        if isinstance(node, ast.AugAssign) and isinstance(node.op, (ast.Add, ast.Sub)) \
+        if isinstance(node, ast.AugAssign) and isinstance(node.op, (ast.Add, ast.Sub)) and id(node) not in in_loops \
                 and isinstance(node.target, ast.Subscript) and _array_index(node.target.slice, loops):
             found.append((s.label, node.lineno, ast.unparse(node.target)))
     return found

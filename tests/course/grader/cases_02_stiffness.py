@@ -249,6 +249,19 @@ def cost_table(ks, m=1.0, T=1.0, h_implicit=0.01):
     },
 }
 
+REJECTED.update({
+    # The amplitude of the velocities not divided by omega: a stiff spring's steady oscillation reads as growth.
+    "amplitude_without_omega": {
+        "culprit": "amplitude",
+        "replace": {"amplitude": '''
+def amplitude(X, omega):
+    return np.sqrt(np.sum(X[:, 0] ** 2) + np.sum(X[:, 1] ** 2))
+'''},
+        "fails": {"test_blows_up_random": "returned True, expected False"},
+    },
+})
+
+
 CORRECT = {
     # Energy instead of amplitude, a linear bisection with a fixed number of halvings, the implicit step
     # by a linear solve, the damping factor in closed form, the cost table with plain Python loops.

@@ -237,6 +237,38 @@ def spring_strain(x, indices, L0):
     },
 }
 
+REJECTED.update({
+    # Both ends get half of every correction, pinned or not: provot_pass moves the pins through its helper.
+    "shares_ignore_the_pins": {
+        "culprit": "end_shares",
+        "replace": {"end_shares": '''
+def end_shares(indices, free):
+    i, j = np.asarray(indices).T
+    half = 0.5 * np.ones(len(i))
+    return half, half
+'''},
+        "fails": {"test_provot_pass_one_spring[first pinned]": "moved the free end by half the excess only",
+                  "test_provot_pass_random_cloths": "your result matches a pass that gives each end half of the "
+                                                    "excess also when the other end is pinned"},
+        "passes": ["test_provot_pass_one_spring[both free]"] + OTHER_TESTS,
+    },
+    # The excess measured from the rest length in the helper: springs come back to L0, not (1 + s) L0.
+    "excess_from_the_rest_length": {
+        "culprit": "spring_excess",
+        "replace": {"spring_excess": '''
+def spring_excess(x, indices, L0, max_strain=0.1):
+    i, j = np.asarray(indices).T
+    d = x[j] - x[i]
+    L = np.linalg.norm(d, axis=1)
+    too_long = L > (1.0 + max_strain) * np.asarray(L0)
+    return np.where(too_long, L - L0, 0.0), d / L[:, None]
+'''},
+        "fails": {"test_provot_pass_one_spring[both free]": "shortened the spring to its rest length"},
+        "passes": OTHER_TESTS,
+    },
+})
+
+
 CORRECT = {
     "bincount_per_coordinate": {
         # the same mathematics written differently: einsum lengths, bincount scatters, frames at once

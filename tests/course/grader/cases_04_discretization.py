@@ -207,6 +207,21 @@ def cloth_sag(nx, ny, width, height, rho, Y):
     },
 }
 
+REJECTED.update({
+    # Every particle weighted 1: the boundary particles get the mass of a whole cell.
+    "dual_weights_all_ones": {
+        "culprit": "dual_weights",
+        "replace": {"dual_weights": '''
+def dual_weights(n):
+    return np.ones(n)
+'''},
+        "fails": {"test_masses_small_grid": "your result matches rho dx dy on every particle (edge particles stand "
+                                            "for half a cell, corners for a quarter) (`particle_masses` relies on "
+                                            "`dual_weights`"},
+    },
+})
+
+
 CORRECT = {
     # masses gathered cell by cell (a quarter of each cell to each of its corners), stiffnesses spring by
     # spring from the index pairs, the exponent by the closed-form least-squares slope

@@ -167,6 +167,8 @@ def distance_constraints(x, ij, L0):
     },
 }
 
+
+
 CORRECT = {
     "jacobi_pass": {
         # the alternative the notebook offers: all corrections from the same positions, averaged
