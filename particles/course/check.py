@@ -71,9 +71,31 @@ class CheckResult:
     def __init__(self, exercise, tests, notes, source, written_answers=None):
         self.exercise, self.tests, self.notes, self.source = exercise, tests, notes, source
         self.score = sum(t.score for t in tests)
-        self.max_score = sum(t.points for t in tests)
-        self.unwritten = _unwritten(tests)
+        self.max_score = sum(t.max_score for t in tests)
+        self.unwritten = _unwritten(self.scored)
         self.written_answers = written_answers
+
+    # -- stretch goals: optional tests, listed apart and never scored ------------------------------
+    @property
+    def scored(self):
+        """The tests that count for the score (all but the stretch goals)."""
+        return [t for t in self.tests if not t.optional]
+
+    @property
+    def stretch_goals(self):
+        """The optional tests (``@pytest.mark.optional``): shown apart, "stretch goal, not scored"."""
+        return [t for t in self.tests if t.optional]
+
+    def _stretch_lines(self):
+        if not self.stretch_goals:
+            return []
+        done = sum(t.passed for t in self.stretch_goals)
+        lines = [f"  Stretch goals (not scored): {done} of {len(self.stretch_goals)} pass"]
+        for t in self.stretch_goals:
+            lines.append(f"  {'PASS' if t.passed else 'TODO'}  {t.name}")
+            if not t.passed:
+                lines.append(f"        {t.reason}")
+        return lines
 
     def _summary(self):
         """The closing lines: what is left to write, or that every public test passes."""
@@ -86,16 +108,17 @@ class CheckResult:
 
     @property
     def passed(self):
-        """True when there are public tests and every one passed."""
-        return bool(self.tests) and all(t.passed for t in self.tests)
+        """True when there are scored public tests and every one passed (stretch goals do not count)."""
+        return bool(self.scored) and all(t.passed for t in self.scored)
 
     def __str__(self):
         lines = [f"{self.exercise}: {self.score:g} / {self.max_score:g} points on the public tests "
                  f"(checked {self.source})"]
-        for t in self.tests:
+        for t in self.scored:
             lines.append(f"  {'PASS' if t.passed else 'FAIL'}  {t.name}")
             if not t.passed:
                 lines.append(f"        {t.reason}")
+        lines += self._stretch_lines()
         lines += [f"  note: {n}" for n in self.notes]
         return "\n".join(lines + self._summary())
 
@@ -104,9 +127,10 @@ class CheckResult:
     def _repr_markdown_(self):
         rows = [f"**{self.exercise}: {self.score:g} / {self.max_score:g} points on the public tests** "
                 f"(checked {self.source})", "", "| | test | what to fix |", "| --- | --- | --- |"]
-        for t in self.tests:
+        for t in self.tests:  # the stretch goals last, labelled
             reason = "" if t.passed else t.reason.replace("|", "\\|")
-            rows.append(f"| {'✅' if t.passed else '❌'} | {t.name} | {reason} |")
+            mark = "✅" if t.passed else ("➖" if t.optional else "❌")
+            rows.append(f"| {mark} | {t.title} | {reason} |")
         rows += [""] + [f"- {n}" for n in self.notes]
         return "\n".join(rows + [""] + self._summary())
 
@@ -122,7 +146,8 @@ class CheckResult:
                 '<th style="text-align:left">what to fix</th></tr></thead><tbody>']
         for t in self.tests:
             reason = "" if t.passed else e(t.reason)
-            rows.append(f"<tr><td>{'✅' if t.passed else '❌'}</td><td style=\"text-align:left\">{e(t.name)}</td>"
+            mark = "✅" if t.passed else ("➖" if t.optional else "❌")
+            rows.append(f"<tr><td>{mark}</td><td style=\"text-align:left\">{e(t.title)}</td>"
                         f"<td style=\"text-align:left\">{reason}</td></tr>")
             if t.figures:  # open under a failed test, folded under a passed one
                 shown = "".join(f'<div style="display:inline-block;margin:0 .5em .5em 0">'
@@ -258,7 +283,7 @@ def check(exercise, notebook=None, *, time_limit=None, root=None):
         else:
             path, source, labels = Path(notebook), f"the saved notebook {notebook}", {}
         result = grade_unit(Unit("you", exercise, path), root, public_only=True, time_limit=time_limit)
-    records = result.tests
+    records = sorted(result.tests, key=lambda t: t.optional)  # stretch goals last, listed apart
     if not records:
         raise CheckError(
             f"no public test of {exercise} ran (pytest status {result.grader_status}), so nothing was checked. "

@@ -12,13 +12,21 @@ tests declare points and visibility::
         '''euler_step matches the reference on random oscillators.'''
         ...
 
+A stretch goal is marked ``@pytest.mark.optional`` (or, for one parameter,
+``pytest.param("rk4", marks=pytest.mark.optional)``): its record carries
+``optional`` and the label "stretch goal, not scored", and no score counts it.
+
 Fixtures:
 
 ``student``
     A :class:`particles.course.runner.Submission` for the notebook being
     graded (one worker per test module, restarted after a crash or a timeout).
     A ``@pytest.mark.time_limit(seconds)`` marker sets its per-call limit
-    (``--time-limit`` sets the default of the tests without one).
+    (``--time-limit`` sets the default of the tests without one). The
+    functions a test calls name the one it judges (the record's
+    ``function``); when every test of the module has run, the failure of a
+    test whose function uses a helper that fails its own tests is blamed on
+    that helper (:mod:`particles.course.blame`).
 ``rng``
     A ``numpy.random.Generator`` for hidden tests, seeded from the grading
     seed and the test's name: the same seed reproduces the same parameters.
@@ -71,6 +79,7 @@ from .figures import Feedback
 from .isolation import Plan, protect_this_process
 from .signing import TOKEN_FD, sign_records
 from .paths import project_root
+from .blame import blame, function_of, stub_functions
 from .records import SessionRecord, TestRecord
 from .release import provided_cells
 from .limits import check_limit
@@ -120,6 +129,8 @@ def pytest_configure(config):
         "points(n): the test is worth n points in the autograder",
         "hidden: an autograder test students do not see before grades are published",
         "time_limit(seconds): per-call time limit of the student's code in this test",
+        "optional: a stretch goal, shown as 'stretch goal, not scored' and left out of the score "
+        "(also as pytest.param(..., marks=pytest.mark.optional))",
     ):
         config.addinivalue_line("markers", line)
     seed = config.getoption("--grading-seed", default=None)
@@ -224,6 +235,9 @@ def _particles_submission(request, _particles_job):
     result = config._particles_results[_particles_job["id"]]
     result.exercise, result.submission = exercise, str(path)
     yield submission
+    # every test of the module has run: a failure downstream of a helper that fails its own tests names it
+    blame([t for t in result.tests if t.test in _module_tests(request)], submission.code,
+          written=stub_functions(root / "exercises" / f"{exercise}.ipynb"))
     submission.close()
     result.restarts = submission.restarts
     result.load_errors = submission.code.student_load_errors(submission.load_errors)
@@ -239,6 +253,8 @@ def student(_particles_submission, request):
     """The submission being graded; ``student.call(name, *args)`` runs its code in the worker."""
     marker = request.node.get_closest_marker("time_limit")
     saved = dict(_particles_submission.limits)
+    _particles_submission.called = request.node._particles_called = []  # which functions this test calls
+    request.node._particles_defined = _particles_submission.code.defines()
     if marker is not None:  # the test's own limit wins over --time-limit, which is the default of the others
         _particles_submission.limits["time_limit"] = check_limit("time_limit", marker.args[0])
     yield _particles_submission
@@ -268,6 +284,11 @@ def feedback(request):
     return board
 
 
+def _module_tests(request):
+    """The keys of the tests of the requesting module (in a batch, of every job)."""
+    return {_test_key(item) for item in request.session.items if item.module is request.module}
+
+
 def _reason(excinfo):
     error = excinfo.value
     if isinstance(error, GradingFailure):
@@ -293,6 +314,8 @@ def record_of(item, outcome, excinfo, seconds):
         passed=outcome == "passed",
         seconds=round(seconds, 3),
         seed=int(_job_of(item)["seed"]) if getattr(item, "_particles_used_seed", False) else None,
+        optional=item.get_closest_marker("optional") is not None,
+        function=function_of(key, getattr(item, "_particles_called", []), getattr(item, "_particles_defined", {})),
     )
     if excinfo is not None and outcome != "passed":
         record.reason, record.grader_error = _reason(excinfo)

@@ -26,10 +26,14 @@ import html
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-__all__ = ["TestRecord", "SessionRecord", "SubmissionRecord", "score_of", "to_gradescope", "VISIBILITIES"]
+__all__ = ["TestRecord", "SessionRecord", "SubmissionRecord", "score_of", "to_gradescope", "VISIBILITIES",
+           "STRETCH_GOAL"]
 
 VISIBILITIES = ("hidden", "after_due_date", "after_published", "visible")
 """Gradescope's visibility settings of a test."""
+
+STRETCH_GOAL = "stretch goal, not scored"
+"""The label of an optional test (``@pytest.mark.optional``) wherever it is shown."""
 
 
 class _Fields(Mapping):
@@ -87,6 +91,11 @@ class TestRecord(_Fields):
         The grading seed, when the test drew random parameters.
     figures : list of dict
         Curves to draw beside the reference's (:mod:`particles.course.figures`).
+    optional : bool
+        A stretch goal (``@pytest.mark.optional``): shown with :data:`STRETCH_GOAL`, never scored.
+    function : str
+        The student's function the test judges ("" when unknown): the grader's blame of a failure
+        on a helper of it that fails its own tests is worded with it.
     """
 
     __test__ = False  # not a pytest test class, whatever its name
@@ -101,21 +110,40 @@ class TestRecord(_Fields):
     seconds: float = 0.0
     seed: int | None = None
     figures: list = field(default_factory=list)
+    optional: bool = False
+    function: str = ""
 
     @property
     def score(self):
-        """The points earned: all of them or none."""
-        return self.points if self.passed else 0.0
+        """The points earned: all of them or none (an optional test earns none: it is not scored)."""
+        return self.points if self.passed and not self.optional else 0.0
+
+    @property
+    def max_score(self):
+        """The points the test counts for: its points, 0 for an optional test."""
+        return 0.0 if self.optional else self.points
+
+    @property
+    def label(self):
+        """:data:`STRETCH_GOAL` for an optional test, else ""."""
+        return STRETCH_GOAL if self.optional else ""
+
+    @property
+    def title(self):
+        """The name as shown: with ``(stretch goal, not scored)`` for an optional test."""
+        return f"{self.name} ({self.label})" if self.optional else self.name
 
     def failed(self, reason):
         """This test as failed for `reason` (a copy; the record itself is unchanged)."""
         return dataclasses.replace(self, passed=False, reason=reason, seed=None)
 
     def to_dict(self):
-        """The record as JSON data (``figures`` only when there are some)."""
+        """The record as JSON data (``figures`` only when there are some, ``label`` with ``optional``)."""
         data = dataclasses.asdict(self)
         if not self.figures:
             del data["figures"]
+        if self.optional:
+            data["label"] = self.label
         return data
 
     @classmethod
@@ -152,22 +180,23 @@ class TestRecord(_Fields):
                       + "".join(figures.figure_html(f, css=False) for f in self.figures))
             output_format = "html"
         return {
-            "name": f"{exercise}: {self.name}",
+            "name": f"{exercise}: {self.title}",
             "number": number,
             "score": self.score,
-            "max_score": self.points,
+            "max_score": self.max_score,
             "status": "passed" if self.passed else "failed",
             "output": output,
             "output_format": output_format,
             "visibility": hidden_visibility if self.hidden else "visible",
-            "tags": [exercise] + (["hidden"] if self.hidden else []),
-            "extra_data": {"test": self.test},
+            "tags": [exercise] + (["hidden"] if self.hidden else []) + (["stretch goal"] if self.optional else []),
+            "extra_data": dict({"test": self.test}, **({"optional": True, "label": self.label} if self.optional
+                                                       else {})),
         }
 
 
 def score_of(tests):
-    """(score, max_score) of a list of test records."""
-    tests = list(tests)
+    """(score, max_score) of a list of test records (records or their JSON data): optional tests count for neither."""
+    tests = [t for t in tests if not t.get("optional", False)]
     return (sum(t["points"] for t in tests if t["passed"]), sum(t["points"] for t in tests))
 
 

@@ -55,8 +55,8 @@ def feedback_markdown(student, results):
         out += ["| | test | points | what happened |", "| --- | --- | ---: | --- |"]
         for test in result.tests:
             mark = "✅" if test.passed else "❌"
-            name = test.name + (" *(hidden)*" if test.hidden else "")
-            out.append(f"| {mark} | {_cell(name)} | {_fmt(test.score)} / {_fmt(test.points)} | "
+            name = test.title + (" *(hidden)*" if test.hidden else "")
+            out.append(f"| {mark} | {_cell(name)} | {_fmt(test.score)} / {_fmt(test.max_score)} | "
                        f"{_cell('' if test.passed else test.reason)} |")
         out.append("")
         out += [f"- {note}" for note in result.notes]
@@ -141,8 +141,8 @@ def feedback_html(student, results):
             status = "passed" if test.passed else "failed"
             hidden = ' <span class="hidden-tag">hidden</span>' if test.hidden else ""
             out.append(f'<tr class="{status}"><td class="mark">{"✓" if test.passed else "✗"}</td>'
-                       f"<td>{e(test.name)}{hidden}</td>"
-                       f'<td class="points">{_fmt(test.score)} / {_fmt(test.points)}</td>'
+                       f"<td>{e(test.title)}{hidden}</td>"
+                       f'<td class="points">{_fmt(test.score)} / {_fmt(test.max_score)}</td>'
                        f'<td class="reason">{"" if test.passed else e(test.reason)}</td></tr>')
             out.append(_figures_row(test))
         out.append("</tbody></table>")

@@ -130,6 +130,7 @@ class Submission:
         self.load_errors = []
         self.load_failure = None
         self.last = {}
+        self.called = []  # the functions the tests called, in order (the plugin empties it before each test)
 
     # -- the worker ------------------------------------------------------------------
     def _start(self):
@@ -210,6 +211,9 @@ class Submission:
             return (f"`{name}` did not finish within {limit:g} s{where} (an endless loop, or far too much work); "
                     "it was stopped")
         if kind == "NotImplementedError":
+            helper = self._raising_helper(name, error)
+            if helper:
+                return f"`{name}` calls {helper}, which is not implemented yet: it raised NotImplementedError{where}"
             return f"`{name}` is not implemented yet: it raised NotImplementedError{where}"
         if kind == "SystemExit":
             return f"`{name}` raised SystemExit{where} (sys.exit() or exit() was called); a function must return its result"
@@ -234,6 +238,21 @@ class Submission:
         if kind == "PermissionError" and "not allowed in this exercise" in message:
             return f"`{name}` used a forbidden library function{where}: {message}"
         return f"`{name}` raised {kind}{where}: {message}" if message else f"`{name}` raised {kind}{where}"
+
+    def _raising_helper(self, name, error):
+        """"`rk4_step`" (or "`rk4_step` (through `convergence_errors`)") when the error was raised in another
+        function of the notebook that `name` uses, else ""."""
+        from .blame import helpers
+
+        where = error.get("where") or ""
+        helper = where.rsplit(", in ", 1)[1].strip() if ", in " in where else ""
+        if not helper or helper == name:
+            return ""
+        chain = helpers(self.code, name).get(helper)
+        if chain is None:
+            return ""
+        through = [n for n in chain[1:-1] if n in helpers(self.code, name)]
+        return f"`{helper}`" + (f" (through `{'`, `'.join(through)}`)" if through else "")
 
     # -- calls ------------------------------------------------------------------------
     def call(self, name, *args, timeout=None, check_inputs=False, **kwargs):
@@ -263,6 +282,7 @@ class Submission:
         GradingFailure
             With one line saying what went wrong.
         """
+        self.called.append(name)
         if self.load_failure:
             raise GradingFailure(self.load_failure)
         uses = self.code.forbidden_uses(name, self.forbidden)

@@ -69,3 +69,39 @@ def test_gradescope_output():
     assert "seed 7" in second["output"] and "Sandbox of your code: namespaces, uid" in data["output"]
     with pytest.raises(ValueError, match="hidden_visibility"):
         to_gradescope("ada", [record], hidden_visibility="never")
+
+
+def _with_stretch_goal():
+    return _tests() + [TestRecord(test="test_c[rk4]", name="c works [rk4]", points=2.0, passed=True, optional=True),
+                       TestRecord(test="test_d[rk4]", name="d works [rk4]", points=1.0, optional=True,
+                                  reason="`rk4_step` is not implemented yet")]
+
+
+def test_an_optional_test_is_labelled_and_not_scored():
+    """An optional test carries its flag and the label "stretch goal, not scored" through JSON; no score counts it."""
+    tests = _with_stretch_goal()
+    record = SubmissionRecord(student="ada", exercise="01_integrator_order", tests=tests)
+    data = json.loads(json.dumps(record.to_dict()))
+    assert [t.get("optional") for t in data["tests"]] == [False, False, True, True]
+    assert [t.get("label") for t in data["tests"]] == [None, None] + ["stretch goal, not scored"] * 2
+    again = SubmissionRecord.from_dict(data)
+    assert again == record
+    assert (again.score, again.max_score) == (2.0, 3.0) == score_of(again.tests) == score_of(data["tests"])
+    assert (tests[2].score, tests[2].max_score, tests[2].label) == (0.0, 0.0, "stretch goal, not scored")
+    assert tests[2].title == "c works [rk4] (stretch goal, not scored)" and tests[0].title == "a works"
+
+
+def test_gradescope_gives_a_stretch_goal_no_points_and_its_label():
+    """In results.json an optional test has score and max_score 0, the label in its name, a tag and extra data."""
+    record = SubmissionRecord(student="ada", exercise="01_integrator_order", tests=_with_stretch_goal())
+    results = to_gradescope("ada", [record])
+    assert (results["score"], results["max_score"]) == (2.0, 3.0)
+    scored, stretch = results["tests"][:2], results["tests"][2:]
+    assert [t["max_score"] for t in scored] == [2.0, 1.0]
+    for entry in stretch:
+        assert entry["score"] == 0 and entry["max_score"] == 0
+        assert entry["name"].endswith("(stretch goal, not scored)") and "stretch goal" in entry["tags"]
+        assert entry["extra_data"]["optional"] is True
+        assert entry["extra_data"]["label"] == "stretch goal, not scored"
+    assert stretch[0]["status"] == "passed" and stretch[1]["status"] == "failed"
+    assert "01_integrator_order: 2 / 3 points" in results["output"]

@@ -186,14 +186,20 @@ def _check_run(got, f, X0, t0, h, n, call, reveal=True):
         raise GradingFailure(f"{call} returned {kind}, expected the tuple (t, X)")
     t_ref, X_ref = _reference_run(f, X0, t0, h, n)
     records = "n_steps steps make n_steps + 1 records, t0 and X0 included"
+    longer = _reference_run(f, X0, t0, h, n + 1)
     expect_array(got[0], t_ref, f"the times t of {call}", rtol=1e-9, show_values=reveal, hints={
-        f"the times without the last one: {records}": t_ref[:-1],
+        f"the times without the last one: your loop takes one step too few ({records})": t_ref[:-1],
+        f"the times of n_steps + 1 steps: your loop takes one step too many ({records}; a loop over all n_steps "
+        "+ 1 times takes one step from the last one too)": longer[0],
         f"the times after each step, without t0: {records}": t_ref[1:],
         "times that start at t0 + h instead of t0": t_ref + h,
         "times that start at 0 instead of t0": t_ref - t0,
     })
     expect_array(got[1], X_ref, f"the states X of {call}", rtol=1e-9, show_values=reveal,
-                 hints=dict({f"the states without the last one: {records}": X_ref[:-1],
+                 hints=dict({f"the states without the last one: your loop takes one step too few ({records})":
+                             X_ref[:-1],
+                             f"the states of n_steps + 1 steps: your loop takes one step too many ({records}; a "
+                             "loop over all n_steps + 1 times takes one step from the last one too)": longer[1],
                              f"the states after each step, without X0: {records}": X_ref[1:]},
                             **_run_hints(f, X0, t0, h, n)))
 

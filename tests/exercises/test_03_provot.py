@@ -129,13 +129,16 @@ def _describe(x, ij, free, s):
     return f"a random cloth of {len(x)} particles, {len(ij)} springs, {int((~free).sum())} pinned"
 
 
-def _pass_variant(x, ij, L0, free, s, ignore_pins=False, one_end=False, from_rest=False, lost=False, summed=False):
+def _pass_variant(x, ij, L0, free, s, ignore_pins=False, one_end=False, from_rest=False, lost=False, summed=False,
+                  halves=False):
     """One Jacobi pass with a typical mistake (the options), to name what a wrong pass did."""
     i, j = ij[:, 0], ij[:, 1]
     movable = np.ones(len(x), dtype=bool) if ignore_pins else free
     f_i, f_j = movable[i].astype(float), movable[j].astype(float)
     total = f_i + f_j
-    if one_end:
+    if halves:
+        w_i = w_j = 0.5 * np.ones_like(f_i)
+    elif one_end:
         w_i, w_j = f_i * (1.0 - f_j), f_j
     else:
         w_i = np.divide(f_i, total, out=np.zeros_like(f_i), where=total > 0)
@@ -166,6 +169,8 @@ def _pass_hints(x, ij, L0, free, s):
             _pass_variant(x, ij, L0, free, s, from_rest=True),
         "a pass that moves only one end of a spring with two free ends (each moves half the excess)":
             _pass_variant(x, ij, L0, free, s, one_end=True),
+        "a pass that gives each end half of the excess also when the other end is pinned (the only free end "
+        "takes all of it: shares f_i / (f_i + f_j))": _pass_variant(x, ij, L0, free, s, halves=True),
         "a pass that adds up the corrections at a particle instead of averaging them":
             _pass_variant(x, ij, L0, free, s, summed=True),
         "a pass that loses corrections at repeated indices (x[i] += c keeps one per particle; use np.add.at or "
@@ -333,6 +338,10 @@ def test_provot_pass_one_spring(student, ends):
         if free.any() and abs(length - 1.0) < 1e-9:
             raise GradingFailure(f"{call} shortened the spring to its rest length 1 m; Provot shortens it only to "
                                  "(1 + max_strain) L0 = 1.1 m")
+        if free.any() and not free.all() and abs(length - 1.3) < 1e-9:
+            raise GradingFailure(f"{call} moved the free end by half the excess only: the spring is {length:.4g} m "
+                                 "long, not 1.1 m; a free end whose partner is pinned takes all of the excess "
+                                 "(the shares are f_i / (f_i + f_j), 1 for the only free end)")
         if free.all() and abs(length - 1.1) < 1e-9 and abs(got[:, 0].mean() - 0.75) > 1e-9:
             raise GradingFailure(f"{call} moved the midpoint to x = {got[:, 0].mean():.4g} m; with both ends free "
                                  "each end moves half the excess and the midpoint stays at 0.75 m")

@@ -14,6 +14,7 @@ FORCE = ["test_total_force_three_particles", "test_total_force_random"]
 REJECTED = {
     # The sum is computed and thrown away: the copy of X comes back, untouched and unstepped.
     "step_result_discarded": {
+        "culprit": "euler_step",
         "replace": {"euler_step": '''
 def euler_step(f, X, t, h):
     X_new = X.copy()
@@ -28,6 +29,7 @@ def euler_step(f, X, t, h):
     },
     # A result array prepared and never filled in.
     "step_left_at_zeros": {
+        "culprit": "euler_step",
         "replace": {"euler_step": '''
 def euler_step(f, X, t, h):
     slope = f(X, t)
@@ -41,6 +43,7 @@ def euler_step(f, X, t, h):
     # The two public answers hard-coded, a copy of X for every other state: only the hidden test used to
     # catch it, the test of an unchanged X passed it.
     "hard_codes_public_steps": {
+        "culprit": "euler_step",
         "replace": {"euler_step": '''
 def euler_step(f, X, t, h):
     f(X, t)
@@ -55,6 +58,7 @@ def euler_step(f, X, t, h):
     },
     # Single precision "to save memory": 7 significant digits, far from the reference's 1e-10.
     "euler_in_float32": {
+        "culprit": "euler_step",
         "replace": {"euler_step": '''
 def euler_step(f, X, t, h):
     X32 = np.asarray(X, dtype=np.float32)          # single precision: half the memory
@@ -68,6 +72,7 @@ def euler_step(f, X, t, h):
     },
     # The state recorded after each step: the trajectory starts one step late, X[0] is not X0.
     "run_records_after_the_step": {
+        "culprit": "run",
         "replace": {"run": '''
 def run(f, X0, t0, h, n_steps):
     t = t0 + h * np.arange(n_steps + 1)
@@ -84,6 +89,7 @@ def run(f, X0, t0, h, n_steps):
     },
     # The first record left as np.empty found it: the trajectory does not start with X0.
     "run_never_stores_X0": {
+        "culprit": "run",
         "replace": {"run": '''
 def run(f, X0, t0, h, n_steps):
     t = t0 + h * np.arange(n_steps + 1)
@@ -99,6 +105,7 @@ def run(f, X0, t0, h, n_steps):
     # The time of the end of the step given to each step: invisible on the circle field, which does not
     # depend on t, caught on the driven oscillator.
     "run_passes_the_next_time": {
+        "culprit": "run",
         "replace": {"run": '''
 def run(f, X0, t0, h, n_steps):
     t = t0 + h * np.arange(n_steps + 1)
@@ -113,6 +120,7 @@ def run(f, X0, t0, h, n_steps):
     },
     # Every step taken from X0: each record is one step from the start.
     "run_restarts_from_X0": {
+        "culprit": "run",
         "replace": {"run": '''
 def run(f, X0, t0, h, n_steps):
     t = t0 + h * np.arange(n_steps + 1)
@@ -129,12 +137,66 @@ def run(f, X0, t0, h, n_steps):
     },
     # The weight g instead of m g: right for unit masses only.
     "gravity_without_the_masses": {
+        "culprit": "total_force",
         "replace": {"total_force": '''
 def total_force(x, v, m, g, d):
     return np.asarray(g, dtype=float) - d * np.asarray(v, dtype=float)
 '''},
         "fails": {"test_total_force_three_particles": "your result matches g - d v, gravity without the masses",
                   "test_total_force_random": "gravity without the masses"},
+        "passes": ["test_euler_step_circle", "test_run_circle"],
+    },
+    # A loop over every time of the trajectory: one step from the last time too.
+    "run_loops_over_every_time": {
+        "culprit": "run",
+        "replace": {"run": '''
+def run(f, X0, t0, h, n_steps):
+    t = np.linspace(t0, t0 + n_steps * h, n_steps + 1)
+    X = [np.array(X0, dtype=float)]
+    for t_k in t:
+        X.append(euler_step(f, X[-1], t_k, h))
+    return t, np.array(X)
+'''},
+        "fails": {"test_run_circle": "your loop takes one step too many",
+                  "test_run_random": "your loop takes one step too many"},
+        "passes": ["test_euler_step_circle", "test_euler_step_random"] + FORCE,
+    },
+    # np.arange leaves out the end time: one record, one step short.
+    "run_with_arange_times": {
+        "culprit": "run",
+        "replace": {"run": '''
+def run(f, X0, t0, h, n_steps):
+    t = np.arange(t0, t0 + n_steps * h, h)
+    X = np.zeros((len(t),) + np.shape(X0))
+    X[0] = X0
+    for k in range(len(t) - 1):
+        X[k + 1] = euler_step(f, X[k], t[k], h)
+    return t, X
+'''},
+        "fails": {"test_run_circle": "your loop takes one step too few"},
+        "passes": ["test_euler_step_circle", "test_euler_step_random"] + FORCE,
+    },
+    # The slope taken at the end of the step: the loop built on it goes wrong too, and is not to blame.
+    "euler_slope_at_the_end": {
+        "culprit": "euler_step",
+        "replace": {"euler_step": '''
+def euler_step(f, X, t, h):
+    return X + h * f(X, t + h)
+'''},
+        "fails": {"test_euler_step_random": "f evaluated at t + h instead of t",
+                  "test_run_random": "`run` calls `euler_step`, which fails its own tests: fix `euler_step` first"},
+        "passes": ["test_euler_step_circle", "test_run_circle"] + FORCE,
+    },
+    # The drag multiplied by the mass along with gravity.
+    "drag_times_the_mass": {
+        "culprit": "total_force",
+        "replace": {"total_force": '''
+def total_force(x, v, m, g, d):
+    m = np.asarray(m, dtype=float)[:, None]
+    return m * (np.asarray(g) - d * np.asarray(v))
+'''},
+        "fails": {"test_total_force_three_particles": "the drag multiplied by the mass",
+                  "test_total_force_random": "the drag multiplied by the mass"},
         "passes": ["test_euler_step_circle", "test_run_circle"],
     },
 }

@@ -17,6 +17,7 @@ WRONG_TIME = "your result matches a midpoint step that evaluates f at t instead 
 
 REJECTED = {
     "midpoint_at_wrong_time": {
+        "culprit": "midpoint_step",
         "replace": {"midpoint_step": '''
 def midpoint_step(f, X, t, h):
     X_m = X + 0.5 * h * f(X, t)
@@ -33,6 +34,7 @@ def midpoint_step(f, X, t, h):
                    "test_step_driven_particles[trapezoid]", "test_convergence_errors_circle"],
     },
     "trapezoid_without_one_half": {
+        "culprit": "trapezoid_step",
         "replace": {"trapezoid_step": '''
 def trapezoid_step(f, X, t, h):
     f_0 = f(X, t)
@@ -48,6 +50,7 @@ def trapezoid_step(f, X, t, h):
         "passes": ["test_step_circle[midpoint]", "test_measured_order_circle[midpoint]"],
     },
     "trapezoid_uneven_weights": {
+        "culprit": "trapezoid_step",
         "replace": {"trapezoid_step": '''
 def trapezoid_step(f, X, t, h):
     f_0 = f(X, t)
@@ -66,6 +69,7 @@ def trapezoid_step(f, X, t, h):
         "passes": ["test_step_circle[euler]", "test_measured_order_circle[euler]", "test_observed_order_noisy"],
     },
     "rk4_equal_weights": {
+        "culprit": "rk4_step",
         "replace": {"rk4_step": '''
 def rk4_step(f, X, t, h):
     k1 = f(X, t)
@@ -82,6 +86,7 @@ def rk4_step(f, X, t, h):
         "passes": ["test_step_circle[midpoint]", "test_measured_order_circle[trapezoid]"],
     },
     "euler_overwrites_X": {
+        "culprit": "euler_step",
         "replace": {"euler_step": '''
 def euler_step(f, X, t, h):
     X += h * f(X, t)
@@ -95,6 +100,7 @@ def euler_step(f, X, t, h):
         "passes": ["test_step_circle[euler]", "test_observed_order_noisy"],
     },
     "order_from_first_two_errors": {
+        "culprit": "observed_order",
         "replace": {"observed_order": '''
 def observed_order(h, errors):
     return float(np.log(errors[0] / errors[1]) / np.log(h[0] / h[1]))
@@ -109,6 +115,7 @@ def observed_order(h, errors):
         "passes": ["test_observed_order_exact_powers", "test_step_circle[euler]"],
     },
     "order_with_mixed_logarithms": {
+        "culprit": "observed_order",
         "replace": {"observed_order": '''
 def observed_order(h, errors):
     return float(np.polyfit(np.log(h), np.log10(errors), 1)[0])
@@ -124,6 +131,7 @@ def observed_order(h, errors):
         "passes": ["test_convergence_errors_circle", "test_step_circle[midpoint]"],
     },
     "euclidean_error": {
+        "culprit": "convergence_errors",
         "replace": {"convergence_errors": '''
 def convergence_errors(method, f, X0, t0, t1, exact, n_steps):
     step = STEPPERS[method] if isinstance(method, str) else method
@@ -146,6 +154,7 @@ def convergence_errors(method, f, X0, t0, t1, exact, n_steps):
     # The clock advanced before the step: each step gets t + h, invisible on the circle field (f does not depend
     # on t), caught on the driven oscillator.
     "errors_with_the_clock_ahead": {
+        "culprit": "convergence_errors",
         "replace": {"convergence_errors": '''
 def convergence_errors(method, f, X0, t0, t1, exact, n_steps):
     step = STEPPERS[method] if isinstance(method, str) else method
@@ -170,6 +179,7 @@ def convergence_errors(method, f, X0, t0, t1, exact, n_steps):
     # No measurement at all: the nominal orders, hard-coded. Close enough to the measured slopes in the
     # asymptotic range of the circle field, but not at coarse steps, where the slope is 1.1-1.4 for Euler.
     "hardcoded_measured_order": {
+        "culprit": "measured_order",
         "replace": {"measured_order": '''
 def measured_order(method, f, X0, t0, t1, exact, n_steps):
     return {"euler": 1, "midpoint": 2, "trapezoid": 2, "rk4": 4}[method]
@@ -184,6 +194,7 @@ def measured_order(method, f, X0, t0, t1, exact, n_steps):
                    "test_convergence_errors_circle", "test_observed_order_noisy", "test_step_circle[rk4]"],
     },
     "midpoint_from_the_library": {
+        "culprit": "midpoint_step",
         "replace": {"midpoint_step": '''
 from particles.integrators import midpoint
 
@@ -198,7 +209,107 @@ def midpoint_step(f, X, t, h):
     },
 }
 
+REJECTED.update({
+    # A loop over the N + 1 times of np.linspace: N + 1 steps, one too many, then compared with X(t1).
+    "errors_loop_over_linspace": {
+        "replace": {"convergence_errors": '''
+def convergence_errors(method, f, X0, t0, t1, exact, n_steps):
+    step = STEPPERS[method]
+    hs, errors = [], []
+    for N in n_steps:
+        h = (t1 - t0) / N
+        X = np.array(X0, dtype=float)
+        for t in np.linspace(t0, t1, N + 1):   # every time from t0 to t1
+            X = step(f, X, t, h)
+        hs.append(h)
+        errors.append(np.max(np.abs(X - exact(t1))))
+    return np.array(hs), np.array(errors)
+'''},
+        "fails": {
+            "test_convergence_errors_circle": "your loop takes one step too many",
+            "test_convergence_errors_random": "one step too many",
+            "test_measured_order_random[midpoint]": "one step too many",
+        },
+        "passes": ["test_step_circle[euler]", "test_observed_order_noisy"],
+        "culprit": "convergence_errors",
+    },
+    # The loop starts counting at 1: N - 1 steps.
+    "errors_loop_from_one": {
+        "replace": {"convergence_errors": '''
+def convergence_errors(method, f, X0, t0, t1, exact, n_steps):
+    step = STEPPERS[method]
+    h = (t1 - t0) / np.array(n_steps)
+    errors = np.zeros(len(n_steps))
+    for j in range(len(n_steps)):
+        X = X0
+        for k in range(1, n_steps[j]):
+            X = step(f, X, t0 + k * h[j], h[j])
+        errors[j] = np.abs(X - exact(t1)).max()
+    return h, errors
+'''},
+        "fails": {
+            "test_convergence_errors_circle": "your loop takes one step too few",
+        },
+        "passes": ["test_step_circle[euler]", "test_observed_order_noisy"],
+        "culprit": "convergence_errors",
+    },
+    # log10 of the errors fitted against h itself.
+    "order_log_errors_against_h": {
+        "replace": {"observed_order": '''
+def observed_order(h, errors):
+    p = np.polyfit(h, np.log10(errors), 1)
+    return p[0]
+'''},
+        "fails": {
+            "test_observed_order_exact_powers": "the step axis is not logarithmic",
+            "test_observed_order_random": "the step axis is not logarithmic",
+            "test_measured_order_circle[euler]": "the step axis is not logarithmic",
+        },
+        "passes": ["test_convergence_errors_circle", "test_step_circle[midpoint]"],
+        "culprit": "observed_order",
+    },
+    # The two arrays passed the wrong way round.
+    "measured_order_swaps_the_arguments": {
+        "replace": {"measured_order": '''
+def measured_order(method, f, X0, t0, t1, exact, n_steps):
+    h, e = convergence_errors(method, f, X0, t0, t1, exact, n_steps)
+    return observed_order(e, h)
+'''},
+        "fails": {
+            "test_measured_order_circle[midpoint]": "your result is 1 / the slope",
+            "test_measured_order_coarse_steps[euler]": "the axes swapped",
+        },
+        "passes": ["test_convergence_errors_circle", "test_observed_order_noisy", "test_step_circle[midpoint]"],
+        "culprit": "measured_order",
+    },
+    # An Euler step that takes the slope at the end of the step: every function built on it is off too.
+    "euler_slope_at_the_end": {
+        "replace": {"euler_step": '''
+def euler_step(f, X, t, h):
+    return X + h * f(X, t + h)
+'''},
+        "fails": {
+            "test_step_driven_particles[euler]": "f evaluated at t + h instead of t",
+            "test_convergence_errors_random": "`convergence_errors` calls `euler_step`, which fails its own tests: "
+                                              "fix `euler_step` first",
+        },
+        "passes": ["test_step_circle[euler]", "test_step_circle[midpoint]", "test_observed_order_noisy"],
+        "culprit": "euler_step",
+    },
+})
+
 CORRECT = {
+    # RK4 is the stretch goal: left as the stub, the submission still scores full marks.
+    "rk4_left_as_stub": {
+        "replace": {"rk4_step": '''
+def rk4_step(f, X, t, h):
+    """One classical fourth-order Runge-Kutta step of dX/dt = f(X, t)."""
+    raise NotImplementedError("rk4_step: stretch goal")
+'''},
+        "optional_fail": {"test_step_circle[rk4]": "`rk4_step` is not implemented yet",
+                          "test_measured_order_circle[rk4]": "`measured_order` calls `rk4_step` (through "
+                                                             "`convergence_errors`), which is not implemented yet"},
+    },
     "tableau_and_polyfit": {
         "replace": {
             "euler_step": '''

@@ -19,6 +19,7 @@ REJECTED = {
     # The bisection stops at a bracket a factor 2 wide and returns its upper end, a step known to blow up: for one
     # spring the check of 0.9 h over a longer test then fails too, and the limit reported is 0.0.
     "bisection_returns_upper_bound": {
+        "culprit": "bisect_stable",
         "replace": {"bisect_stable": '''
 def bisect_stable(unstable, lo, hi, rtol=0.01):
     while hi > 2 * lo:
@@ -37,6 +38,7 @@ def bisect_stable(unstable, lo, hi, rtol=0.01):
     # The bisection narrows its bracket to rtol but returns its upper end: a step within 1% above the limit,
     # which blows up (a check against theory within a few per cent let it pass).
     "bisection_returns_upper_end": {
+        "culprit": "bisect_stable",
         "replace": {"bisect_stable": '''
 def bisect_stable(unstable, lo, hi, rtol=0.01):
     while hi > (1 + rtol) * lo:
@@ -54,6 +56,7 @@ def bisect_stable(unstable, lo, hi, rtol=0.01):
     # Six halvings of the bracket 0.01 / omega to 10 / omega, then its midpoint: a bracket 11% wide, and a
     # step 4.5% above symplectic Euler's limit (1.7% above RK4's) that blows up.
     "bisection_too_few_halvings": {
+        "culprit": "bisect_stable",
         "replace": {"bisect_stable": '''
 def bisect_stable(unstable, lo, hi, rtol=0.01):
     for _ in range(6):
@@ -70,6 +73,7 @@ def bisect_stable(unstable, lo, hi, rtol=0.01):
     },
     # The step confirmed by the longer test, 0.9 h, returned instead of h: stable, but 10% short of the limit.
     "returns_the_confirmed_step": {
+        "culprit": "stable_limit",
         "replace": {"stable_limit": '''
 def stable_limit(unstable, omega, steps=200, rtol=0.01):
     lo, hi = 0.01 / omega, 10.0 / omega
@@ -90,6 +94,7 @@ def stable_limit(unstable, omega, steps=200, rtol=0.01):
     },
     # No measurement at all: the theoretical limit, with omega = k/m instead of sqrt(k/m).
     "theory_with_k_over_m": {
+        "culprit": "max_stable_step",
         "replace": {"max_stable_step": '''
 def max_stable_step(method, k, m, steps=200, rtol=0.01):
     limits = {"symplectic_euler": 2.0, "verlet": 2.0, "rk4": 2.0 * np.sqrt(2.0)}
@@ -102,6 +107,7 @@ def max_stable_step(method, k, m, steps=200, rtol=0.01):
     },
     # The theoretical limit, right this time, but not measured: a short test finds a larger limit.
     "theory_not_measured": {
+        "culprit": "max_stable_step",
         "replace": {"max_stable_step": '''
 def max_stable_step(method, k, m, steps=200, rtol=0.01):
     limits = {"symplectic_euler": 2.0, "verlet": 2.0, "rk4": 2.0 * np.sqrt(2.0)}
@@ -114,6 +120,7 @@ def max_stable_step(method, k, m, steps=200, rtol=0.01):
     # The chain's limit from the formula for omega_max given in the notebook, not measured: right for long
     # tests, but a 20-step test lets RK4 go 5% past it.
     "chain_from_theory": {
+        "culprit": "chain_max_stable_step",
         "replace": {"chain_max_stable_step": '''
 def chain_max_stable_step(method, n, k, m, steps=200, rtol=0.01):
     limit = {"symplectic_euler": 2.0, "verlet": 2.0, "rk4": 2.0 * np.sqrt(2.0)}.get(method, 0.0)
@@ -125,6 +132,7 @@ def chain_max_stable_step(method, n, k, m, steps=200, rtol=0.01):
     # Everything from theory: the blow-up test compares omega h with the limit, the limits are the table of
     # lecture 7 (with a 5% allowance for short tests), the cost uses them, the damping is the closed form.
     "all_from_theory": {
+        "culprit": ["blows_up", "max_stable_step", "chain_max_stable_step", "cost_table", "damping_factor"],
         "replace": {
             "blows_up": '''
 def blows_up(method, k, m, h, steps=200):
@@ -163,6 +171,7 @@ def damping_factor(omega_h, steps=50):
     },
     # No confirmation with a longer test: explicit Euler gets the 'limit' of a 200-step test.
     "euler_gets_a_limit": {
+        "culprit": "stable_limit",
         "replace": {"stable_limit": '''
 def stable_limit(unstable, omega, steps=200, rtol=0.01):
     lo, hi = 0.01 / omega, 10.0 / omega
@@ -177,6 +186,7 @@ def stable_limit(unstable, omega, steps=200, rtol=0.01):
     },
     # The 'implicit' step uses the old position in the force: that is symplectic Euler.
     "implicit_step_is_explicit": {
+        "culprit": "implicit_euler_spring",
         "replace": {"implicit_euler_spring": '''
 def implicit_euler_spring(x, v, k, m, h):
     v_new = v - h * k / m * x
@@ -191,6 +201,7 @@ def implicit_euler_spring(x, v, k, m, h):
     },
     # The energy's factor per step, not the amplitude's.
     "damping_squared": {
+        "culprit": "damping_factor",
         "replace": {"damping_factor": '''
 def damping_factor(omega_h, steps=50):
     return 1.0 / (1.0 + np.asarray(omega_h, dtype=float) ** 2)
@@ -202,6 +213,7 @@ def damping_factor(omega_h, steps=50):
     # The notebook's spring (omega = 10 rad/s) simulated at h = omega h / omega, and the amplitude's factor taken per
     # second of simulated time, (A_N / A_0) ** (1 / (N h)), instead of per step.
     "damping_per_second": {
+        "culprit": "damping_factor",
         "replace": {"damping_factor": '''
 def damping_factor(omega_h, steps=50):
     wh = np.asarray(omega_h, dtype=float)
@@ -220,6 +232,7 @@ def damping_factor(omega_h, steps=50):
     },
     # Implicit Euler held to the explicit limit 'to be safe': its cost grows with k like the others.
     "implicit_held_to_explicit_limit": {
+        "culprit": "cost_table",
         "replace": {"cost_table": '''
 def cost_table(ks, m=1.0, T=1.0, h_implicit=0.01):
     table = {}
@@ -235,6 +248,19 @@ def cost_table(ks, m=1.0, T=1.0, h_implicit=0.01):
         "passes": [ONE_SPRING, RANDOM, EULER, MEASURED] + CHAIN + BLOWS_UP + IMPLICIT + DAMPING,
     },
 }
+
+REJECTED.update({
+    # The amplitude of the velocities not divided by omega: a stiff spring's steady oscillation reads as growth.
+    "amplitude_without_omega": {
+        "culprit": "amplitude",
+        "replace": {"amplitude": '''
+def amplitude(X, omega):
+    return np.sqrt(np.sum(X[:, 0] ** 2) + np.sum(X[:, 1] ** 2))
+'''},
+        "fails": {"test_blows_up_random": "returned True, expected False"},
+    },
+})
+
 
 CORRECT = {
     # Energy instead of amplitude, a linear bisection with a fixed number of halvings, the implicit step

@@ -48,6 +48,7 @@ OTHER_TESTS = ["test_spring_strain_three_springs", "test_spring_strain_random_cl
 
 REJECTED = {
     "pinned_particles_move": {
+        "culprit": "provot_pass",
         # the pins are ignored: every spring's excess is split half and half
         "replace": {"provot_pass": '''
 def provot_pass(x, indices, L0, free, max_strain=0.1):
@@ -73,6 +74,7 @@ def provot_pass(x, indices, L0, free, max_strain=0.1):
         "passes": ["test_provot_pass_one_spring[both free]"] + OTHER_TESTS,
     },
     "one_end_only": {
+        "culprit": "provot_pass",
         # both ends free, only the second end moves (by the whole excess)
         "replace": {"provot_pass": _pass(shares="\n    w_j = f_j\n    w_i = f_i * (1.0 - f_j)\n")},
         "fails": {
@@ -87,6 +89,7 @@ def provot_pass(x, indices, L0, free, max_strain=0.1):
                    "test_provot_pass_one_spring[both pinned]"] + OTHER_TESTS,
     },
     "repeated_indices_lose_corrections": {
+        "culprit": "provot_pass",
         # dx[i] += c keeps one correction per repeated index
         "replace": {"provot_pass": _pass(scatter='''
     dx = np.zeros_like(x)
@@ -104,6 +107,7 @@ def provot_pass(x, indices, L0, free, max_strain=0.1):
         "passes": PASS_TESTS[:4] + OTHER_TESTS,
     },
     "shortened_to_rest_length": {
+        "culprit": "provot_pass",
         # the excess measured from L0 instead of (1 + s) L0
         "replace": {"provot_pass": _pass(excess=_EXCESS.replace("e = np.where(too_long, L - limit, 0.0)",
                                                                 "e = np.where(too_long, L - np.asarray(L0), 0.0)"))},
@@ -118,6 +122,7 @@ def provot_pass(x, indices, L0, free, max_strain=0.1):
         "passes": ["test_provot_pass_one_spring[both pinned]"] + OTHER_TESTS,
     },
     "corrections_summed_not_averaged": {
+        "culprit": "provot_pass",
         "replace": {"provot_pass": _pass(scatter='''
     dx = np.zeros_like(x)
     np.add.at(dx, i, (w_i * e)[:, None] * u)
@@ -132,6 +137,7 @@ def provot_pass(x, indices, L0, free, max_strain=0.1):
         "passes": PASS_TESTS[:4] + OTHER_TESTS,
     },
     "velocities_not_updated": {
+        "culprit": "constrain_state",
         "replace": {"constrain_state": '''
 def constrain_state(X, h, indices, L0, free, max_strain=0.1, iterations=500, tol=0.005):
     X = np.asarray(X, dtype=float)
@@ -149,6 +155,7 @@ def constrain_state(X, h, indices, L0, free, max_strain=0.1, iterations=500, tol
                                               "test_provot_project_properties"],
     },
     "no_early_stop": {
+        "culprit": "provot_project",
         "replace": {"provot_project": '''
 def provot_project(x, indices, L0, free, max_strain=0.1, iterations=500, tol=0.005):
     x = np.array(x, dtype=float)
@@ -166,6 +173,7 @@ def provot_project(x, indices, L0, free, max_strain=0.1, iterations=500, tol=0.0
         "passes": PASS_TESTS + OTHER_TESTS,
     },
     "pinned_springs_block_the_stop": {
+        "culprit": "provot_project",
         # the stopping test also looks at springs whose two ends are pinned, which never get shorter
         "replace": {"provot_project": '''
 def provot_project(x, indices, L0, free, max_strain=0.1, iterations=500, tol=0.005):
@@ -181,6 +189,7 @@ def provot_project(x, indices, L0, free, max_strain=0.1, iterations=500, tol=0.0
         "passes": PASS_TESTS + OTHER_TESTS + ["test_provot_project_chain", "test_provot_project_nothing_to_do"],
     },
     "compression_counted_as_strain": {
+        "culprit": "max_strain_history",
         "replace": {"max_strain_history": '''
 def max_strain_history(X, indices, L0):
     return np.array([np.abs(spring_strain(Xk[:, 0], indices, L0)).max() for Xk in np.asarray(X)])
@@ -195,6 +204,7 @@ def max_strain_history(X, indices, L0):
     # The largest strain of each frame, without max(0, ...): a frame where every spring is compressed gives a
     # negative number, where the master (and the docstring) say 0.
     "strain_history_not_clipped": {
+        "culprit": "max_strain_history",
         "replace": {"max_strain_history": '''
 def max_strain_history(X, indices, L0):
     return np.array([spring_strain(Xk[:, 0], indices, L0).max() for Xk in np.asarray(X, dtype=float)])
@@ -209,6 +219,7 @@ def max_strain_history(X, indices, L0):
     # The Green (Green-Lagrange) strain of continuum mechanics, (L^2 - L0^2) / (2 L0^2), instead of the engineering
     # strain L / L0 - 1 that the exercise (and Provot's limit) uses: equal to first order, 12% apart at 50%.
     "green_strain": {
+        "culprit": "spring_strain",
         "replace": {"spring_strain": '''
 def spring_strain(x, indices, L0):
     x = np.asarray(x, dtype=float)
@@ -225,6 +236,38 @@ def spring_strain(x, indices, L0):
         "passes": PASS_TESTS,
     },
 }
+
+REJECTED.update({
+    # Both ends get half of every correction, pinned or not: provot_pass moves the pins through its helper.
+    "shares_ignore_the_pins": {
+        "culprit": "end_shares",
+        "replace": {"end_shares": '''
+def end_shares(indices, free):
+    i, j = np.asarray(indices).T
+    half = 0.5 * np.ones(len(i))
+    return half, half
+'''},
+        "fails": {"test_provot_pass_one_spring[first pinned]": "moved the free end by half the excess only",
+                  "test_provot_pass_random_cloths": "your result matches a pass that gives each end half of the "
+                                                    "excess also when the other end is pinned"},
+        "passes": ["test_provot_pass_one_spring[both free]"] + OTHER_TESTS,
+    },
+    # The excess measured from the rest length in the helper: springs come back to L0, not (1 + s) L0.
+    "excess_from_the_rest_length": {
+        "culprit": "spring_excess",
+        "replace": {"spring_excess": '''
+def spring_excess(x, indices, L0, max_strain=0.1):
+    i, j = np.asarray(indices).T
+    d = x[j] - x[i]
+    L = np.linalg.norm(d, axis=1)
+    too_long = L > (1.0 + max_strain) * np.asarray(L0)
+    return np.where(too_long, L - L0, 0.0), d / L[:, None]
+'''},
+        "fails": {"test_provot_pass_one_spring[both free]": "shortened the spring to its rest length"},
+        "passes": OTHER_TESTS,
+    },
+})
+
 
 CORRECT = {
     "bincount_per_coordinate": {

@@ -17,6 +17,7 @@ _EXPONENT_TESTS = ["test_fit_exponent_power_law", "test_fit_exponent_random", "t
 REJECTED = {
     # the mass of the whole sheet on every particle: the density times the total area, never divided
     "mass_of_the_whole_sheet": {
+        "culprit": "particle_masses",
         "replace": {"particle_masses": '''
 def particle_masses(nx, ny, width, height, rho):
     """Mass of each particle."""
@@ -31,6 +32,7 @@ def particle_masses(nx, ny, width, height, rho):
     },
     # a whole cell on every particle: edges and corners are too heavy, the total converges only as 1/n
     "mass_ignores_boundary_cells": {
+        "culprit": "particle_masses",
         "replace": {"particle_masses": '''
 def particle_masses(nx, ny, width, height, rho):
     """Mass of each particle: density times the area of a cell."""
@@ -45,6 +47,7 @@ def particle_masses(nx, ny, width, height, rho):
     },
     # stiffness proportional to the rest length instead of inversely (k = Y L0)
     "stiffness_grows_with_rest_length": {
+        "culprit": "spring_stiffness",
         "replace": {"spring_stiffness": _STIFFNESS_HEAD + '''
     out = {}
     for kind, ij in pairs.items():
@@ -63,6 +66,7 @@ def particle_masses(nx, ny, width, height, rho):
     # the naive constants of section 3 kept: the same mass and stiffnesses at every resolution (at 8 x 8 a stable
     # step 2% above the physical cloth's, which a check within 2% on either side let pass)
     "naive_constants": {
+        "culprit": ["particle_masses", "spring_stiffness"],
         "replace": {
             "particle_masses": '''
 def particle_masses(nx, ny, width, height, rho):
@@ -85,6 +89,7 @@ def particle_masses(nx, ny, width, height, rho):
     },
     # log(spacing) fitted against log(h_max): the slope is 1 / p on exact power laws
     "exponent_on_swapped_axes": {
+        "culprit": "fit_exponent",
         "replace": {"fit_exponent": '''
 def fit_exponent(spacing, h_max):
     """Exponent of h_max ~ spacing^p."""
@@ -100,6 +105,7 @@ def fit_exponent(spacing, h_max):
     # the stable step from the rough estimate omega_max ~ sqrt(k / m) of the stiffest spring and the lightest
     # particle: 1.3% to 6% above 2 / omega_max, an unstable step (within 2% of it on fabrics with little shear)
     "stable_step_from_the_stiffest_spring": {
+        "culprit": "stable_step",
         "replace": {"stable_step": '''
 def stable_step(nx, ny, width, height, rho, Y):
     """2 / omega_max, with omega_max = sqrt(k / m) of the stiffest spring and the lightest particle."""
@@ -115,6 +121,7 @@ def stable_step(nx, ny, width, height, rho, Y):
     },
     # a flexion spring given the rest length of one cell (L0 = dx instead of 2 dx): four times too stiff
     "flexion_rest_length_of_one_cell": {
+        "culprit": "spring_stiffness",
         "replace": {"spring_stiffness": _STIFFNESS_HEAD + '''
     wx, wy = np.ones(nx), np.ones(ny)
     wx[[0, -1]] = wy[[0, -1]] = 0.5
@@ -134,6 +141,7 @@ def stable_step(nx, ny, width, height, rho, Y):
     },
     # ln of the spacing against log10 of the steps: the slope is p / ln(10)
     "exponent_with_mixed_logarithms": {
+        "culprit": "fit_exponent",
         "replace": {"fit_exponent": '''
 def fit_exponent(spacing, h_max):
     """Exponent of h_max ~ spacing^p."""
@@ -147,6 +155,7 @@ def fit_exponent(spacing, h_max):
     },
     # the mean drop of all particles instead of the drop of the lowest one: it converges too, to a third of the sag
     "mean_sag_instead_of_the_lowest_point": {
+        "culprit": "sag",
         "replace": {"sag": '''
 def sag(system):
     """Static sag: how far the cloth comes down, on average, from the flat sheet to equilibrium."""
@@ -161,6 +170,7 @@ def sag(system):
     },
     # the library's rule instead of a derivation: caught in the code (an import) and at run time (a computed name)
     "library_rule": {
+        "culprit": ["particle_masses", "spring_stiffness", "cloth_sag"],
         "replace": {
             "particle_masses": '''
 from particles.massspring import cloth_masses
@@ -196,6 +206,21 @@ def cloth_sag(nx, ny, width, height, rho, Y):
         "passes": _EXPONENT_TESTS,
     },
 }
+
+REJECTED.update({
+    # Every particle weighted 1: the boundary particles get the mass of a whole cell.
+    "dual_weights_all_ones": {
+        "culprit": "dual_weights",
+        "replace": {"dual_weights": '''
+def dual_weights(n):
+    return np.ones(n)
+'''},
+        "fails": {"test_masses_small_grid": "your result matches rho dx dy on every particle (edge particles stand "
+                                            "for half a cell, corners for a quarter) (`particle_masses` relies on "
+                                            "`dual_weights`"},
+    },
+})
+
 
 CORRECT = {
     # masses gathered cell by cell (a quarter of each cell to each of its corners), stiffnesses spring by

@@ -60,6 +60,7 @@ OTHER_TESTS = ["test_distance_constraints_two_rods", "test_distance_constraints_
 
 REJECTED = {
     "alpha_not_divided_by_substep": {
+        "culprit": "xpbd_step",
         # alpha_tilde = alpha: the compliance is negligible next to w, the string nearly rigid
         "replace": {"xpbd_step": _changed(_STEP, "np.asarray(compliance, dtype=float) / hs**2",
                                           "np.asarray(compliance, dtype=float)")},
@@ -73,6 +74,7 @@ REJECTED = {
         "passes": PASS_TESTS + OTHER_TESTS,
     },
     "alpha_over_the_whole_step": {
+        "culprit": "xpbd_step",
         "replace": {"xpbd_step": _changed(_STEP, "np.asarray(compliance, dtype=float) / hs**2",
                                           "np.asarray(compliance, dtype=float) / h**2")},
         "fails": {
@@ -83,6 +85,7 @@ REJECTED = {
         "passes": PASS_TESTS + OTHER_TESTS,
     },
     "multiplier_ignored_in_the_pass": {
+        "culprit": "xpbd_pass",
         # dlambda = -C / (w_i + w_j + alpha_tilde): the correction never stops at the spring's stretch
         "replace": {"xpbd_pass": _changed(_PASS, "-C - alpha_tilde[k] * lam[k]", "-C")},
         "fails": {
@@ -95,6 +98,7 @@ REJECTED = {
                    "test_xpbd_pass_colour_order"] + OTHER_TESTS,
     },
     "multiplier_not_accumulated": {
+        "culprit": "xpbd_pass",
         # the positions move, but lambda is returned as it came: every pass starts from lambda = 0 again
         "replace": {"xpbd_pass": _changed(_PASS, "        lam[k] += dlam\n", "")},
         "fails": {
@@ -106,6 +110,7 @@ REJECTED = {
         "passes": OTHER_TESTS,
     },
     "multipliers_reset_every_iteration": {
+        "culprit": "xpbd_step",
         # the multipliers start from zero at every pass: the correction never stops at the spring's stretch
         "replace": {"xpbd_step": _changed(_STEP, _RESET_PER_SUBSTEP, _RESET_PER_ITERATION)},
         "fails": {
@@ -117,6 +122,7 @@ REJECTED = {
         "passes": PASS_TESTS + OTHER_TESTS,
     },
     "gradient_sign_reversed": {
+        "culprit": "distance_constraints",
         # n from x_i to x_j: every correction pushes the wrong way
         "replace": {"distance_constraints": '''
 def distance_constraints(x, ij, L0):
@@ -136,6 +142,7 @@ def distance_constraints(x, ij, L0):
         "passes": ["test_chain_stiffness_by_hand", "test_chain_stiffness_random"],
     },
     "inverse_masses_swapped": {
+        "culprit": "xpbd_pass",
         "replace": {"xpbd_pass": _changed(_changed(_PASS, "x[i] += (w[i] * dlam)", "x[i] += (w[j] * dlam)"),
                                           "x[j] -= (w[j] * dlam)", "x[j] -= (w[i] * dlam)")},
         "fails": {
@@ -147,6 +154,7 @@ def distance_constraints(x, ij, L0):
         "passes": OTHER_TESTS,
     },
     "velocities_not_from_positions": {
+        "culprit": "xpbd_step",
         # v keeps the prediction's velocity: the string never comes to rest
         "replace": {"xpbd_step": _changed(_STEP, "        v = (x - x_n) / hs\n", "")},
         "fails": {
@@ -158,6 +166,8 @@ def distance_constraints(x, ij, L0):
         "passes": PASS_TESTS + OTHER_TESTS,
     },
 }
+
+
 
 CORRECT = {
     "jacobi_pass": {

@@ -5,10 +5,15 @@ defines
 
 * ``EXERCISE = "NN_topic"``;
 * ``REJECTED``: case name -> ``{"replace": {function: code}, "append": [code],
-  "fails": {test: piece of its reason}, "passes": [tests]}``, at least two
-  per exercise, each losing the points it should with a message that says
-  what is wrong;
-* ``CORRECT`` (optional): case name -> a case that must score full marks.
+  "fails": {test: piece of its reason}, "passes": [tests], "culprit": function}``,
+  at least eight per exercise (the typical mistakes, written as a student
+  would), each losing the points it should with a message that says what is
+  wrong; ``culprit`` is the function that holds the mistake, which every
+  failing test's message must name (downstream of it too: the grader blames
+  a helper that fails its own tests, see :mod:`particles.course.blame`);
+* ``CORRECT`` (optional): case name -> a case that must score full marks;
+  ``"optional_fail": {test: piece}`` lists stretch-goal tests it leaves
+  failing (a stub left alone), which are labelled and not scored.
 
 Every wrong submission must be told its mistake in words: at least one piece
 of ``fails`` names it (:func:`names_a_mistake`: more than the "is off by" of a
@@ -61,6 +66,12 @@ def build(exercise, case):
                                   "execution_count": None, "id": f"extra-{len(notebook['cells'])}"})
     notebook["metadata"]["particles"] = {"exercise": exercise}
     return notebook
+
+
+def master_code(exercise):
+    """The code cells of the master of `exercise`, joined (to check that a case's culprit is one of its functions)."""
+    notebook = json.loads((ROOT / "solutions" / f"{exercise}.ipynb").read_text())
+    return "\n".join(_source(c) for c in notebook["cells"] if c["cell_type"] == "code")
 
 
 def write_corpora(folder, modules=None):

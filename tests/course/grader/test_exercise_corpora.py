@@ -5,6 +5,8 @@ fixture, two jobs, fixed seed, the hidden tests' draws recorded); the tests
 then read the verdicts. See ``exercise_corpus.py`` for the format of a case.
 """
 
+import os
+import re
 import sys
 from pathlib import Path
 
@@ -17,7 +19,10 @@ from particles.course.grading import grade  # noqa: E402
 from particles.course.reports import score_of  # noqa: E402
 
 SEED = 20261201
-MODULES = exercise_corpus.case_modules()
+ONLY = "PARTICLES_CORPORA"
+"""Set to exercise numbers (``"01,03"``), only their corpora are graded: for working on one exercise."""
+MODULES = [m for m in exercise_corpus.case_modules()
+           if not os.environ.get(ONLY) or m.EXERCISE[:2] in os.environ[ONLY].split(",")]
 EXERCISES = [m.EXERCISE for m in MODULES]
 REJECTED = [(m.EXERCISE, name) for m in MODULES for name in sorted(m.REJECTED)]
 CORRECT = [(m.EXERCISE, name) for m in MODULES for name in sorted(getattr(m, "CORRECT", {}))]
@@ -77,7 +82,10 @@ def test_wrong_submission_loses_its_points(graded, exercise, case):
     for test in spec.get("passes", []):
         assert tests[test]["passed"], f"{test} should pass: {tests[test]['reason']}"
     score, max_score = score_of(list(tests.values()))
-    assert score < max_score
+    if all(tests[test].get("optional") for test in spec["fails"]):  # a wrong stretch goal: told, not scored
+        assert score == max_score
+    else:
+        assert score < max_score
 
 
 @pytest.mark.parametrize("exercise, case", REJECTED, ids=[f"{e}-{c}" for e, c in REJECTED])
@@ -87,6 +95,28 @@ def test_wrong_submission_is_told_its_mistake(graded, exercise, case):
     named = [(test, phrase) for test, phrase in exercise_corpus.diagnoses(CASES[exercise][case])
              if not tests[test]["passed"] and exercise_corpus.names_a_mistake(phrase, tests[test]["reason"])]
     assert named, {test: tests[test]["reason"] for test in CASES[exercise][case]["fails"]}
+
+
+_NUMBER = r"(-?\d+(?:\.\d+)?)"
+
+
+@pytest.mark.parametrize("exercise", EXERCISES)
+def test_figures_and_messages_show_the_same_numbers(graded, exercise):
+    """A failed test's figure labels the student's curve with the order its message gives, never another one."""
+    disagree = {}
+    for student, (ex, case) in graded["students"].items():
+        if ex != exercise:
+            continue
+        for test in _tests(graded, exercise, case).values():
+            said = [float(x) for x in re.findall(rf"(?:with order|returned) {_NUMBER}", test["reason"])]
+            for figure in test.get("figures", []) if not test["passed"] else []:
+                for series in figure["series"]:
+                    shown = [float(x) for x in re.findall(rf"(?:slope|order|measured_order):? {_NUMBER}",
+                                                          series["label"])]
+                    if said and shown and series["label"].startswith("yours") \
+                            and not any(abs(a - b) <= 0.006 for a in said for b in shown):
+                        disagree[f"{case}: {test['test']}"] = (series["label"], test["reason"][:200])
+    assert not disagree, disagree
 
 
 @pytest.mark.parametrize("exercise", EXERCISES)
@@ -107,11 +137,71 @@ def test_hidden_messages_never_show_random_parameters(graded, exercise):
     assert not shown, shown
 
 
+@pytest.mark.parametrize("exercise, case", REJECTED, ids=[f"{e}-{c}" for e, c in REJECTED])
+def test_wrong_submission_is_told_the_mistake_and_the_function_that_holds_it(graded, exercise, case):
+    """Every failing test names the function that holds the mistake (its `culprit`), also downstream of it,
+    and one of them names the mistake in words."""
+    tests = _tests(graded, exercise, case)
+    spec = CASES[exercise][case]
+    culprits = [spec["culprit"]] if isinstance(spec["culprit"], str) else spec["culprit"]  # a list: several wrong
+    failed = {test: t["reason"] for test, t in tests.items() if not t["passed"]}
+    assert failed
+    def names(reason, seen=()):
+        """The reason names a culprit, or blames a helper (fix `A` first) whose own failures name one."""
+        if any(re.search(rf"\b{re.escape(c)}\b", reason) for c in culprits):
+            return True
+        blamed = re.match(r"`\w+` calls `(\w+)`.*?, which fails its own tests: fix `\w+` first", reason)
+        helper = blamed.group(1) if blamed else None
+        return bool(helper) and helper not in seen and any(
+            names(r, seen + (helper,)) for t, r in failed.items() if tests[t].get("function") == helper)
+
+    silent = {test: reason for test, reason in failed.items() if not names(reason)}
+    assert not silent, f"these failures do not name {' or '.join(culprits)}: {silent}"
+    named = [(test, phrase) for test, phrase in exercise_corpus.diagnoses(spec)
+             if test in failed and exercise_corpus.names_a_mistake(phrase, failed[test])]
+    assert named, failed
+
+
+@pytest.mark.parametrize("exercise", EXERCISES)
+def test_each_exercise_has_eight_typical_mistakes_with_their_culprits(exercise):
+    """Every exercise's corpus holds at least eight wrong submissions, each naming the function at fault."""
+    (module,) = [m for m in MODULES if m.EXERCISE == exercise]
+    assert len(module.REJECTED) >= 8
+    for name, case in module.REJECTED.items():
+        culprits = [case["culprit"]] if isinstance(case.get("culprit"), str) else case.get("culprit") or []
+        assert culprits and all(isinstance(c, str) and c for c in culprits), f"{name} has no culprit"
+        for c in culprits:
+            assert f"def {c}(" in exercise_corpus.master_code(exercise), f"{name}: the master defines no {c}"
+
+
 @pytest.mark.parametrize("exercise, case", CORRECT, ids=[f"{e}-{c}" for e, c in CORRECT])
 def test_correct_variant_scores_full_marks(graded, exercise, case):
-    """Correct code written differently from the master scores full marks."""
+    """Correct code written differently from the master scores full marks; a stretch goal left undone fails
+    only its own tests, labelled and not scored."""
     tests = _tests(graded, exercise, case)
-    assert all(t["passed"] for t in tests.values()), {k: t["reason"] for k, t in tests.items() if not t["passed"]}
+    required = {k: t for k, t in tests.items() if not t.get("optional")}
+    assert all(t["passed"] for t in required.values()), \
+        {k: t["reason"] for k, t in required.items() if not t["passed"]}
+    score, max_score = score_of(list(tests.values()))
+    assert score == max_score > 0
+    for test, piece in CASES[exercise][case].get("optional_fail", {}).items():
+        assert tests[test]["optional"] and not tests[test]["passed"], test
+        assert piece in tests[test]["reason"], tests[test]["reason"]
+        assert tests[test]["label"] == "stretch goal, not scored"
+
+
+@pytest.mark.parametrize("exercise", EXERCISES)
+def test_optional_tests_are_marked_and_not_scored(graded, exercise):
+    """A stretch goal's tests carry `optional` and their label in the master's record, and count for no score."""
+    tests = list(_tests(graded, exercise, "master").values())
+    optional = [t for t in tests if t.get("optional")]
+    assert all(t["label"] == "stretch goal, not scored" for t in optional)
+    assert score_of(tests)[1] == sum(t["points"] for t in tests if not t.get("optional"))
+    if exercise == "01_integrator_order":
+        assert sorted(t["test"] for t in optional) == sorted(
+            f"{name}[rk4]" for name in ("test_step_circle", "test_step_driven_particles", "test_step_random",
+                                        "test_measured_order_circle", "test_measured_order_random",
+                                        "test_measured_order_coarse_steps"))
 
 
 @pytest.mark.parametrize("exercise", EXERCISES)
