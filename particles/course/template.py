@@ -87,11 +87,16 @@ _EXAMPLE = """X = np.zeros((2, 2, 2))
 X[1, 1] = [3.0, 4.0]
 kinetic_energy(X, np.array([2.0, 1.0]))"""
 
-_QUESTION = """**Question.** Doubling every velocity multiplies $K$ by which factor? And doubling every mass?
+_QUESTION = """**Question 1.** Doubling every velocity multiplies $K$ by which factor?
 
 ### BEGIN SOLUTION
-$K$ is quadratic in the velocities and linear in the masses: doubling the velocities multiplies it by
-4, doubling the masses by 2.
+$K$ is quadratic in the velocities: doubling them multiplies it by 4.
+### END SOLUTION
+
+**Question 2.** And doubling every mass?
+
+### BEGIN SOLUTION
+$K$ is linear in the masses: doubling them multiplies it by 2.
 ### END SOLUTION"""
 
 _MASTER_CHECK = """### INSTRUCTOR ONLY
