@@ -450,10 +450,10 @@ def _figure_errors(feedback, student, method, name, params, n_steps, hidden=Fals
     slope = f" (slope {fit_order(h, yours):.2f})" if usable else ""
     note = ""
     if measured is not None:  # the number of the message, and the slope drawn when it is another
-        slope = f" (your measured_order: {measured:.2f})"
-        if usable and not abs(fit_order(h, yours) - measured) <= SLOPE_TOLERANCE:
-            note = (f" The least-squares slope of your errors drawn here is {fit_order(h, yours):.2f}; your "
-                    f"measured_order returned {measured:.2f}.")
+        drawn = fit_order(h, yours) if usable else None
+        other = (f"; the errors drawn fall with {drawn:.2f}" if drawn is not None
+                 and not abs(drawn - measured) <= SLOPE_TOLERANCE else "")
+        slope = f" (slope {measured:.2f} by your measured_order{other})"
     yours = yours if yours is not None and yours.ndim == 1 else None
     x, scale = (h / h[0], reference[0]) if hidden else (h, 1.0)
     series = [{"label": f"reference (slope {fit_order(h, reference):.2f})", "x": x, "y": reference / scale}]

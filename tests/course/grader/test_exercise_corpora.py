@@ -109,10 +109,10 @@ def test_figures_and_messages_show_the_same_numbers(graded, exercise):
             continue
         for test in _tests(graded, exercise, case).values():
             said = [float(x) for x in re.findall(rf"(?:with order|returned) {_NUMBER}", test["reason"])]
-            for figure in test.get("figures", []) if not test["passed"] else []:
+            figures = test.get("figures", []) if not test["passed"] else []
+            for figure in figures[-1:]:  # the figure attached just before the check that failed
                 for series in figure["series"]:
-                    shown = [float(x) for x in re.findall(rf"(?:slope|order|measured_order):? {_NUMBER}",
-                                                          series["label"])]
+                    shown = [float(x) for x in re.findall(rf"slope {_NUMBER}", series["label"])[:1]]
                     if said and shown and series["label"].startswith("yours") \
                             and not any(abs(a - b) <= 0.006 for a in said for b in shown):
                         disagree[f"{case}: {test['test']}"] = (series["label"], test["reason"][:200])
@@ -174,6 +174,11 @@ def test_each_exercise_has_eight_typical_mistakes_with_their_culprits(exercise):
             assert f"def {c}(" in exercise_corpus.master_code(exercise), f"{name}: the master defines no {c}"
 
 
+def _label(test):
+    """The label of an optional test: a record's property, or the key its JSON data has."""
+    return test.label if hasattr(test, "label") else test["label"]
+
+
 @pytest.mark.parametrize("exercise, case", CORRECT, ids=[f"{e}-{c}" for e, c in CORRECT])
 def test_correct_variant_scores_full_marks(graded, exercise, case):
     """Correct code written differently from the master scores full marks; a stretch goal left undone fails
@@ -187,7 +192,7 @@ def test_correct_variant_scores_full_marks(graded, exercise, case):
     for test, piece in CASES[exercise][case].get("optional_fail", {}).items():
         assert tests[test]["optional"] and not tests[test]["passed"], test
         assert piece in tests[test]["reason"], tests[test]["reason"]
-        assert tests[test]["label"] == "stretch goal, not scored"
+        assert _label(tests[test]) == "stretch goal, not scored"
 
 
 @pytest.mark.parametrize("exercise", EXERCISES)
@@ -195,7 +200,7 @@ def test_optional_tests_are_marked_and_not_scored(graded, exercise):
     """A stretch goal's tests carry `optional` and their label in the master's record, and count for no score."""
     tests = list(_tests(graded, exercise, "master").values())
     optional = [t for t in tests if t.get("optional")]
-    assert all(t["label"] == "stretch goal, not scored" for t in optional)
+    assert all(_label(t) == "stretch goal, not scored" for t in optional)
     assert score_of(tests)[1] == sum(t["points"] for t in tests if not t.get("optional"))
     if exercise == "01_integrator_order":
         assert sorted(t["test"] for t in optional) == sorted(
