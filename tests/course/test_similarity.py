@@ -60,7 +60,7 @@ STEP_IMPORTS = ("import math\nimport numpy as np\n"
 
 def copied_midpoint(extra_line=""):
     """A midpoint_step cell that pastes the library's midpoint and its two helpers under new names."""
-    helpers = renamed(particles.integrators._arguments, STEP_NAMES) + renamed(particles.integrators._evaluate,
+    helpers = renamed(particles.integrators.common.check_arguments, STEP_NAMES) + renamed(particles.integrators.common.evaluate,
                                                                               STEP_NAMES)
     step = renamed(particles.integrators.midpoint, STEP_NAMES)
     if extra_line:
@@ -85,8 +85,8 @@ def test_renamed_copy_of_library_midpoint_is_identical(tmp_path):
     found = pairs_of(report, "ada")
     assert ("midpoint_step", "library: particles.integrators.midpoint", 1.0, "identical") in found
     # the renaming also changed the error messages ('state must be finite'): the same structure, other constants
-    assert ("check_inputs", "library: particles.integrators._arguments", 1.0, "identical up to constants") in found
-    assert ("slope_of", "library: particles.integrators._evaluate", 1.0, "identical up to constants") in found
+    assert ("check_inputs", "library: particles.integrators.common.check_arguments", 1.0, "identical up to constants") in found
+    assert ("slope_of", "library: particles.integrators.common.evaluate", 1.0, "identical up to constants") in found
     where = next(p for p in report.pairs if p.b.name == "particles.integrators.midpoint" or
                  p.a.name == "particles.integrators.midpoint")
     lib, student = sorted((where.a, where.b), key=lambda f: f.kind)
@@ -96,18 +96,18 @@ def test_renamed_copy_of_library_midpoint_is_identical(tmp_path):
 
 
 def test_renamed_copy_of_the_string_builder_is_identical(tmp_path):
-    """particles.massspring.string (from particles.strands) pasted, names changed, helpers imported: identical."""
+    """particles.massspring.string (from particles.massspring.strands) pasted, names changed, helpers imported: identical."""
     # keyword arguments (m=m, springs=[springs], pinned=pinned) keep their names: they are the callee's API
     names = {"string": "make_chain", "n": "count", "length": "L", "x": "pos", "i": "idx", "direction": "u"}
     cell = ("import numpy as np\nfrom particles.massspring import MassSpringSystem\n"
-            "from particles.strands import _chain, _chain_parameters\n"
-            "from particles.springsystem import common_forces\n"
+            "from particles.massspring.strands import _chain, _chain_parameters\n"
+            "from particles.massspring.model import common_forces\n"
             "from particles.springs import Springs\n\n"
             + renamed(particles.massspring.string, names)
             + "\n\ndef run(f, X0, t0, h, n_steps):\n    system = make_chain(3)\n    return system.X, n_steps\n")
     write(tmp_path, "ada", EX00, replace={"run": cell})
     found = pairs_of(similarity([tmp_path], root=ROOT), "ada")
-    assert ("make_chain", "library: particles.strands.string", 1.0, "identical") in found
+    assert ("make_chain", "library: particles.massspring.strands.string", 1.0, "identical") in found
 
 
 def test_two_students_with_the_same_code_under_other_names(tmp_path):
@@ -368,5 +368,5 @@ def test_planted_copies_are_found_among_many_distinct_submissions(tmp_path):
 def test_library_functions_that_only_delegate_are_no_references():
     """A library function whose body is ``return g(...)`` is not compared; one with more to it is."""
     names = {f.name for f in library_functions()}
-    assert "particles._sweep.candidates_touching" not in names  # return candidates_in_boxes(...)
-    assert "particles._sweep.candidates_in_boxes" in names and "particles.integrators.midpoint" in names
+    assert "particles.collisions.candidates.candidates_touching" not in names  # return candidates_in_boxes(...)
+    assert "particles.collisions.candidates.candidates_in_boxes" in names and "particles.integrators.midpoint" in names
