@@ -47,7 +47,7 @@ from _timing import best_time  # noqa: E402
 from particles import backends  # noqa: E402
 from particles.forces import LennardJones, NBodyGravity  # noqa: E402
 from particles.integrators import symplectic_euler  # noqa: E402
-from particles.liquids import fcc_lattice  # noqa: E402
+from particles.md import fcc_lattice  # noqa: E402
 from particles.massspring import cloth  # noqa: E402
 from particles.xpbd import XPBD  # noqa: E402
 

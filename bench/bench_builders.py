@@ -6,7 +6,7 @@ makes it, stepped by symplectic Euler through :meth:`ParticleSystem.run`
 (its divergence guard included), ``h = 5e-5`` s:
 
 * springs + gravity (the defaults, two pinned corners);
-* ``damping=0.05``: air damping (:class:`~particles.fields.Damping`, the lectures' cloth);
+* ``damping=0.05``: air damping (:class:`~particles.forces.fields.Damping`, the lectures' cloth);
 * ``kd=2e-4``: damping along every spring;
 * ``bending_modulus=1e-4``: bending at the joints (:class:`~particles.springs.Bending`);
 * ``wind=(2, 0, 1)`` with ``damping=0.05``: wind and drag;

@@ -44,11 +44,11 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _timing import best_time  # noqa: E402
 
-from particles.intersections import box_pairs, intersections  # noqa: E402
+from particles.collisions import box_pairs, intersections  # noqa: E402
 from particles.integrators import symplectic_euler  # noqa: E402
 from particles.massspring import cloth  # noqa: E402
-from particles.mesh import TriangleMesh  # noqa: E402
-from particles.surfaces import Plane  # noqa: E402
+from particles.collisions import TriangleMesh  # noqa: E402
+from particles.collisions import Plane  # noqa: E402
 
 
 def folded(n, gap, z0=0.0, radius=0.06, ramp=0.2):
@@ -143,7 +143,7 @@ def sheet_in_contact(n, warmup=10):
     The same physical scene at every n: the fold's loop and ramp in metres,
     the thickness ``0.25 dx``, the gaps in thicknesses.
     """
-    from particles.clothcollisions import ClothCollisions
+    from particles.collisions import ClothCollisions
 
     dx = 1.0 / (n - 1)
     thickness = 0.25 * dx

@@ -3,9 +3,9 @@
 The acceptance run of issue 15: a 64 x 64 sheet (1 m, physical scaling),
 standing on its lower edge with a slight bow, falls for 2 s onto a floor,
 buckles and folds onto itself. It is stepped by XPBD (10 substeps, h = 10
-ms) inside :class:`particles.clothcollisions.ClothCollisions` (thickness half
+ms) inside :class:`particles.collisions.pipeline.ClothCollisions` (thickness half
 the spacing, friction 0.3), and after every step the exact test
-:func:`particles.intersections.intersections` counts the crossing triangle
+:func:`particles.collisions.triangle_crossing.intersections` counts the crossing triangle
 pairs. The same sheet with the floor alone (no self-collision treatment) is
 the baseline of the same run. Printed per quarter second: time per step,
 the largest number of crossing pairs, the closest pair over the thickness.
@@ -23,11 +23,11 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
-from particles.clothcollisions import ClothCollisions  # noqa: E402
-from particles.intersections import intersections  # noqa: E402
+from particles.collisions import ClothCollisions  # noqa: E402
+from particles.collisions import intersections  # noqa: E402
 from particles.massspring import cloth  # noqa: E402
-from particles.mesh import TriangleMesh  # noqa: E402
-from particles.surfaces import Plane  # noqa: E402
+from particles.collisions import TriangleMesh  # noqa: E402
+from particles.collisions import Plane  # noqa: E402
 from particles.xpbd import XPBD  # noqa: E402
 
 FLOOR = Plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0])

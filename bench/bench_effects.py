@@ -23,8 +23,8 @@ from _timing import best_time  # noqa: E402
 from particles import ParticleSystem  # noqa: E402
 from particles.collisions import Box, Collider, Plane, Sphere  # noqa: E402
 from particles.effects import ParticleEffect  # noqa: E402
-from particles.emitters import Cone, Disk, Emitter  # noqa: E402
-from particles.flocking import Boids  # noqa: E402
+from particles.effects import Cone, Disk, Emitter  # noqa: E402
+from particles.effects import Boids  # noqa: E402
 from particles.forces import Gravity, pair_differences  # noqa: E402
 from particles.neighbors import all_pairs  # noqa: E402
 

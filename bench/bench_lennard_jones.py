@@ -30,10 +30,10 @@ from _timing import best_time  # noqa: E402
 
 from particles import ParticleSystem  # noqa: E402
 from particles.forces import LennardJones  # noqa: E402
-from particles.liquids import fcc_lattice, maxwell_boltzmann  # noqa: E402
+from particles.md import fcc_lattice, maxwell_boltzmann  # noqa: E402
 from particles.neighbors import cell_pairs  # noqa: E402
-from particles.periodic import wrap  # noqa: E402
-from particles.thermostats import Berendsen  # noqa: E402
+from particles.md import wrap  # noqa: E402
+from particles.md import Berendsen  # noqa: E402
 
 CELLS = {1000: (10, 5, 5), 4000: (10, 10, 10), 16000: (20, 20, 10), 64000: (20, 20, 40)}
 

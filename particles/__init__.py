@@ -2,24 +2,28 @@
 
 The reference library follows the lecture's animation loop, and has one
 time loop, :meth:`ParticleSystem.run`: a state ``X`` of shape ``(n, 2, d)``
-(positions and velocities), forces that add into a force array
-(:mod:`particles.forces`), and ODE steppers ``step(f, X, t, h)`` or solver
-objects ``solver.step(X, t, h)`` (:mod:`particles.steppers`). On top of it:
-collisions with implicit surfaces (:mod:`particles.collisions`), emitters and
-particle effects with lifetimes (:mod:`particles.emitters`,
-:mod:`particles.effects`, colours in :mod:`particles.colours`), flocks
-(:mod:`particles.flocking`), mass-spring models with Provot's constraint,
-implicit solvers and cloth self-collision (:mod:`particles.massspring`,
-:mod:`particles.constraints`, :mod:`particles.implicit`,
-:mod:`particles.selfcollision`), position-based constraints and rigid rods
-(:mod:`particles.xpbd`, :mod:`particles.pbdconstraints`, :mod:`particles.rigid`),
-cloth as a triangle mesh that never passes through itself (:mod:`particles.mesh`,
-:mod:`particles.intersections`, :mod:`particles.proximity`, :mod:`particles.ccd`,
-:mod:`particles.clothcollisions`, moving bodies in :mod:`particles.moving`), molecular dynamics in a periodic box
-(:mod:`particles.periodic`, :mod:`particles.thermostats`,
-:mod:`particles.liquids`, :mod:`particles.statistics`) and drawing
-(:mod:`particles.render`, imported on demand because it loads Matplotlib's
-pyplot). ``CONTRIBUTING.md`` describes the layout and the data flow of a step.
+(positions and velocities), forces that add into a force array, and ODE
+steppers ``step(f, X, t, h)`` or solver objects ``solver.step(X, t, h)``.
+One package per area of the lecture, each ``__init__`` docstring its map:
+
+* :mod:`particles.integrators`: steppers, solver forms, the time loop;
+* :mod:`particles.forces`: gravity, damping, fields, pair forces, N-body, Lennard-Jones;
+* :mod:`particles.massspring`: strings, hair and cloth builders (springs in :mod:`particles.springs`);
+* :mod:`particles.implicit`: implicit solvers of stiff springs (Baraff-Witkin, prefactored), statics;
+* :mod:`particles.constraints`: Provot's strain limit, rigid rods;
+* :mod:`particles.xpbd`: position-based dynamics;
+* :mod:`particles.collisions`: surfaces, the particle collider, cloth meshes and their collisions;
+* :mod:`particles.effects`: emitters, particle effects, colours, flocks;
+* :mod:`particles.md`: molecular dynamics in a periodic box;
+* :mod:`particles.explore`: explorations of a parameter with a slider;
+* :mod:`particles.backends`: compiled kernels; :mod:`particles.demos`, :mod:`particles.studies`: demos and studies;
+* :mod:`particles.course`: release and grading of the exercises.
+
+The root keeps what every area shares: :mod:`particles.system` (:class:`ParticleSystem`, births and deaths
+in :mod:`particles.population`), :mod:`particles.springs`, :mod:`particles.neighbors` (bucket grid),
+:mod:`particles.problems`, :mod:`particles.errors`, the command line (:mod:`particles.cli`,
+:mod:`particles.tour`) and drawing (:mod:`particles.render`, imported on demand because it loads
+Matplotlib's pyplot). ``CONTRIBUTING.md`` says where to make a change and describes the data flow of a step.
 
 >>> import particles
 >>> from particles.forces import Gravity, Damping
@@ -27,14 +31,11 @@ pyplot). ``CONTRIBUTING.md`` describes the layout and the data flow of a step.
 >>> t, X = ps.run(0.5, h=0.01, method="verlet")
 """
 
-from . import (ccd, clothcollisions, collisions, colours, constraints, effects, emitters, flocking, forces, implicit,
-               integrators, intersections, liquids, massspring, mesh, moving, neighbors, pbdconstraints, periodic,
-               proximity, rigid, selfcollision, springs, statistics, steppers, surfaces, thermostats, xpbd)
-from .clothcollisions import ClothCollisions
-from .collisions import Collider
-from .effects import ParticleEffect
+from . import (collisions, constraints, effects, forces, implicit, integrators, massspring, md, neighbors, springs,
+               xpbd)
+from .collisions import ClothCollisions, Collider
+from .effects import Flock, ParticleEffect
 from .errors import ConvergenceError, SimulationDiverged
-from .flocking import Flock
 from .integrators import INTEGRATORS, integrate
 from .system import ParticleSystem
 
@@ -103,36 +104,19 @@ __all__ = [
     "SimulationDiverged",
     "ConvergenceError",
     "Collider",
+    "ClothCollisions",
     "ParticleEffect",
     "Flock",
     "check",
+    "collisions",
     "constraints",
-    "colours",
+    "effects",
     "forces",
     "implicit",
     "integrators",
     "massspring",
+    "md",
     "neighbors",
     "springs",
-    "surfaces",
-    "collisions",
-    "emitters",
-    "effects",
-    "flocking",
-    "selfcollision",
-    "periodic",
-    "thermostats",
-    "statistics",
-    "liquids",
-    "steppers",
     "xpbd",
-    "pbdconstraints",
-    "rigid",
-    "mesh",
-    "intersections",
-    "proximity",
-    "ccd",
-    "clothcollisions",
-    "ClothCollisions",
-    "moving",
 ]

@@ -1,7 +1,7 @@
 """Vector helpers shared by the library's modules (private to the package).
 
 :func:`unit`, for the two layouts the library uses: columns of a
-``(dim, s)`` array (pair differences from :func:`particles.pairs.pair_differences`,
+``(dim, s)`` array (pair differences from :func:`particles.forces.pairs.pair_differences`,
 one column per spring or pair) and rows of an ``(n, dim)`` array (gradients
 of implicit surfaces, one row per particle); and :func:`rowdot`, the dot
 product of rows summed in coordinate order.

@@ -51,7 +51,7 @@ def _root(args):
 
 
 def _release(args):
-    from .course.release import ReleaseError, release, write_bundle
+    from .course.release import release, ReleaseError, write_bundle
 
     try:
         root = _root(args)
@@ -80,7 +80,7 @@ def _release(args):
 
 
 def _grade(args):
-    from .course.grading import LibraryChanged, grade
+    from .course.grading import grade, LibraryChanged
     from .course.isolation import IsolationUnavailable
     def progress(result):
         print(f"  graded {result.student:<24} {result.exercise:<16} {result.score:>5g} / {result.max_score:<5g}"

@@ -23,7 +23,7 @@ Each unordered pair is found once (a half stencil, and ``j > i`` within the
 particle's own row). :class:`VerletList` adds a skin so that the pair list can
 be reused over many steps.
 
-**Periodic boxes** (``box=L``, see :mod:`particles.periodic`): the box is cut
+**Periodic boxes** (``box=L``, see :mod:`particles.md.periodic`): the box is cut
 into a whole number of cells per axis (each at least ``cutoff / k``), and the
 grid wraps around. Along axis 0 the ``k`` cell columns next to each face are
 copied, shifted by ``+-L_0``, into padding cells beyond the opposite face, so
@@ -44,7 +44,7 @@ References
 import numpy as np
 
 from ._checks import as_float_array, nonnegative_number, positive_number
-from .periodic import box_option, check_box
+from .md.periodic import box_option, check_box
 
 __all__ = ["CellGrid", "cell_pairs", "all_pairs", "VerletList"]
 
@@ -78,7 +78,7 @@ class CellGrid:
         Largest number of cells (default ``max(4096, 8 n)``).
     box : array_like, shape (d,) or float, optional
         Side lengths ``L`` of a periodic box, in the unit of `x` (see
-        :mod:`particles.periodic`); each at least ``2 cutoff``. Distances are
+        :mod:`particles.md.periodic`); each at least ``2 cutoff``. Distances are
         then minimum-image distances, and `x` may lie anywhere (the grid
         wraps a copy into the box). Default ``None``: open space.
 
@@ -437,7 +437,7 @@ class VerletList:
     the box, the images are found from the positions at each build. A
     particle wrapped by hand between two calls has jumped by ``L``, which
     rebuilds the list (correct, only slower): wrap for display
-    (:func:`particles.periodic.wrap`), not during a run.
+    (:func:`particles.md.periodic.wrap`), not during a run.
     """
 
     def __init__(self, cutoff, skin, cells_per_cutoff=3, box=None):

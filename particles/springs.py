@@ -30,8 +30,8 @@ import scipy.sparse
 from ._checks import as_float_array, index_array, indices_fit, per_item
 from ._vectors import unit
 from .backends import check_backend, kernels_for
-from .fields import Force
-from .pairs import pair_differences
+from .forces.fields import Force
+from .forces.pairs import pair_differences
 
 __all__ = ["Springs", "Bending", "Clamp", "spring_jacobian_blocks"]
 

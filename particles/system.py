@@ -22,13 +22,14 @@ import numpy as np
 
 from ._checks import as_float_array, end_time, finite_real, pinned_indices, positive_number
 from .backends import compiled_step
-from .integrators import BLOWUP_FACTOR, integrate
-from .steppers import as_stepper
+from .integrators.loop import BLOWUP_FACTOR, integrate
+from .integrators.solvers import as_stepper
+from .population import Population
 
 __all__ = ["ParticleSystem"]
 
 
-class ParticleSystem:
+class ParticleSystem(Population):
     """`n` point masses in `d` dimensions moved by a sum of forces.
 
     Parameters
@@ -120,150 +121,6 @@ class ParticleSystem:
     def d(self):
         """Dimension of space (2 or 3)."""
         return self.X.shape[2]
-
-    def define_attribute(self, name, fill=0.0, shape=(), dtype=float):
-        """Create a per-particle attribute, kept aligned when particles come and go.
-
-        Parameters
-        ----------
-        name : str
-            Key in :attr:`attributes`.
-        fill : scalar or array_like of shape `shape`
-            Value of existing particles, and of new particles added without it.
-        shape : tuple of int
-            Shape of the value per particle (``()`` for a number, ``(3,)`` for
-            an RGB colour).
-        dtype : data-type
-
-        Returns
-        -------
-        ndarray, shape (n,) + shape
-            The new attribute array (also ``self.attributes[name]``).
-        """
-        if not isinstance(name, str) or not name:
-            raise ValueError(f"name must be a non-empty string, got {name!r}")
-        if name in self.attributes:
-            raise ValueError(f"name {name!r} is already an attribute of this system")
-        shape = tuple(int(k) for k in np.atleast_1d(shape)) if shape != () else ()
-        try:
-            fill = np.broadcast_to(np.asarray(fill, dtype=dtype), shape).copy()
-        except ValueError:
-            raise ValueError(f"fill must have shape {shape}, got {np.shape(fill)}") from None
-        self._fill[name] = fill
-        self.attributes[name] = np.broadcast_to(fill, (self.n,) + shape).copy()
-        return self.attributes[name]
-
-    def add_particles(self, x, v=None, m=1.0, **attributes):
-        """Append particles to the system (emitters use this); returns their indices.
-
-        Parameters
-        ----------
-        x : array_like, shape (k, d)
-            Positions of the new particles, in metres.
-        v : array_like, shape (k, d), optional
-            Velocities, in m/s (default zero).
-        m : float or array_like, shape (k,)
-            Masses, in kg, > 0.
-        **attributes : array_like, shape (k,) + attribute shape, or one value
-            Values of attributes made with :meth:`define_attribute`; missing
-            ones get that attribute's `fill`.
-
-        Returns
-        -------
-        ndarray of int, shape (k,)
-            Indices of the new particles (the last `k`). New particles are not pinned.
-
-        Notes
-        -----
-        The state stays in Fortran order (see the class Notes). Forces that
-        cache per-particle data (a neighbour list) are told through their
-        ``reset()`` method when they have one.
-        """
-        x = as_float_array(x, "x", shape=(None, self.d))
-        k = len(x)
-        v = np.zeros_like(x) if v is None else as_float_array(v, "v", shape=(k, self.d))
-        m = as_float_array(m, "m", ndim=(0, 1))
-        m = np.broadcast_to(m, (k,)) if m.ndim == 0 else m
-        if m.shape != (k,):
-            raise ValueError(f"m must be a number or have shape ({k},), got shape {m.shape}")
-        if np.any(m <= 0):
-            raise ValueError("m must be positive: every mass must be > 0 kg")
-        unknown = sorted(set(attributes) - set(self.attributes))
-        if unknown:
-            raise ValueError(
-                f"unknown attributes {unknown}; create them first with define_attribute "
-                f"(known: {sorted(self.attributes)})"
-            )
-        new = {}
-        for name, values in self.attributes.items():
-            value = attributes.get(name, self._fill[name])
-            try:
-                new[name] = np.broadcast_to(np.asarray(value, dtype=values.dtype), (k,) + values.shape[1:])
-            except ValueError:
-                raise ValueError(
-                    f"attribute {name!r} must have shape {(k,) + values.shape[1:]}, got {np.shape(value)}"
-                ) from None
-        start = self.n
-        X_new = np.empty((k, 2, self.d))
-        X_new[:, 0], X_new[:, 1] = x, v
-        self.X = np.asfortranarray(np.concatenate([self.X, X_new]))
-        self.m = np.concatenate([self.m, m])
-        for name, values in new.items():
-            self.attributes[name] = np.concatenate([self.attributes[name], values])
-        self._forces_changed()
-        return np.arange(start, start + k)
-
-    def remove_particles(self, which):
-        """Remove particles, keeping masses, pins and attributes aligned.
-
-        Parameters
-        ----------
-        which : array_like of bool, shape (n,), or of int
-            A mask of the particles to remove, or their indices.
-
-        Returns
-        -------
-        keep : ndarray of int, shape (n_left,)
-            Old indices of the particles that remain, in order: particle
-            ``keep[i]`` is now particle ``i``.
-
-        Notes
-        -----
-        Forces that store particle indices (springs) are not renumbered:
-        remove particles only from systems whose forces act on each particle
-        alone or find their pairs anew (gravity, fields, Lennard-Jones, boids).
-        """
-        which = np.asarray(which)
-        if which.dtype == bool:
-            if which.shape != (self.n,):
-                raise ValueError(f"which as a boolean mask must have shape ({self.n},), got {which.shape}")
-            gone = which
-        else:
-            if which.size and (which.ndim != 1 or not np.issubdtype(which.dtype, np.integer)):
-                raise ValueError(f"which must be particle indices or a boolean mask, got {which!r}")
-            if np.any((which < -self.n) | (which >= self.n)):
-                raise ValueError(f"which indices must lie in [0, {self.n}), got {which.tolist()}")
-            gone = np.zeros(self.n, dtype=bool)
-            gone[which.astype(int) % max(self.n, 1)] = True
-        keep = np.flatnonzero(~gone)
-        if len(keep) == self.n:
-            return keep
-        self.X = np.asfortranarray(self.X[keep])
-        self.m = self.m[keep]
-        for name in self.attributes:
-            self.attributes[name] = self.attributes[name][keep]
-        new_index = np.cumsum(~gone) - 1  # old index -> new index, for the survivors
-        self.pinned = new_index[self.pinned[~gone[self.pinned]]]
-        self._forces_changed()
-        return keep
-
-    def _forces_changed(self):
-        """Tell forces with cached per-particle data that the particles changed."""
-        self._changes += 1
-        for force in self.forces:
-            reset = getattr(force, "reset", None)
-            if callable(reset):
-                reset()
 
     def state(self):
         """A copy of the current state ``X``, shape (n, 2, d)."""
@@ -435,7 +292,7 @@ class ParticleSystem:
         return self.derivative
 
     def _stepper(self, method):
-        """The stepper form of `method` (see :mod:`particles.steppers`), a solver checked to be this system's."""
+        """The stepper form of `method` (see :mod:`particles.integrators.solvers`), a solver checked as ours."""
         step = as_stepper(method)
         solver = getattr(step, "solver", None)
         built_for = getattr(solver, "system", self)
@@ -482,7 +339,7 @@ class ParticleSystem:
 
         This is the library's one time loop. Collisions, constraints and
         solvers come in through `method` (a stepper, possibly wrapped, see
-        :mod:`particles.steppers`); flocks, effects and anything else that
+        :mod:`particles.integrators.solvers`); flocks, effects and anything else that
         acts between two steps come in through `between_steps`. The steps,
         `every` and the divergence guard are those of
         :func:`particles.integrators.integrate`.
@@ -550,8 +407,8 @@ class ParticleSystem:
         Notes
         -----
         With a stepper that ends where the next step starts (``fsal``:
-        ``"verlet"``, :class:`particles.thermostats.Langevin`, a
-        :class:`particles.thermostats.Berendsen` around Verlet) and forces
+        ``"verlet"``, :class:`particles.md.thermostats.Langevin`, a
+        :class:`particles.md.thermostats.Berendsen` around Verlet) and forces
         that all depend on the positions only (``uses_velocity = False``:
         gravity, fields, N-body, Lennard-Jones), the force at the end of a
         step is reused at the start of the next one: a run of ``N`` steps

@@ -11,8 +11,8 @@ pairs), that is worth a factor of several (``bench/bench_backends.py``).
 **The switch.** Every object that has a compiled kernel takes a ``backend``
 argument (:class:`~particles.springs.Springs`,
 :class:`~particles.springs.Bending`,
-:class:`~particles.lennardjones.LennardJones`,
-:class:`~particles.nbody.NBodyGravity`, :class:`~particles.xpbd.XPBD` and
+:class:`~particles.forces.lennardjones.LennardJones`,
+:class:`~particles.forces.nbody.NBodyGravity`, :class:`~particles.xpbd.XPBD` and
 :func:`~particles.xpbd.distance_pass`):
 
 * ``"numpy"``: the reference code, always;
@@ -39,7 +39,7 @@ order wherever that costs nothing (springs, bending and XPBD give the same
 bits as NumPy), and sums per particle in a fixed order what NumPy scatters
 with ``np.bincount``, so the two agree to about 1e-15 relative (tested to
 1e-12 on every problem of the force contract and on larger ones,
-``tests/library/test_backends.py``).
+``tests/library/backends/test_backends.py``).
 
 **Determinism and threads.** Loops of 16k items or more run on numba's
 threads (``NUMBA_NUM_THREADS``, or :func:`numba.set_num_threads`); shorter
@@ -69,7 +69,7 @@ over blocks of particles (:mod:`particles.backends._step_kernels`): each
 block copies the particles its springs touch into rows ``(x, v)``, computes
 its springs and bending joints, adds air damping, wind and gravity, and
 updates its own particles; clamps have a kernel of their own
-(:attr:`~particles.fields.Force.compiled_role` says what each force is).
+(:attr:`~particles.forces.fields.Force.compiled_role` says what each force is).
 Provot's pass and a collider's fix run compiled after the step, in place
 (:mod:`particles.backends.fixes`). A force without a compiled form is added
 by its own ``add_to`` with ``"numba"``; with ``"auto"`` the system keeps the
@@ -97,6 +97,14 @@ folder of the temporary directory): never inside the package, which may be
 read-only and whose files the grader checksums. With no writable place,
 kernels are compiled in memory, once per process. ``bench/bench_backends.py``
 reports the compile time and the cached load time apart from the run times.
+
+Modules
+-------
+* :mod:`particles.backends.compiled`: the numba drivers, one per compiled force, and the compiled step;
+* :mod:`particles.backends.xpbdstep`: the compiled XPBD substep;
+* :mod:`particles.backends.fixes`: Provot's pass and the collider as compiled fixes of a step's end state;
+* ``_kernels.py``, ``_step_kernels.py``, ``_pbd_kernels.py``, ``_provot_kernels.py``,
+  ``_collider_kernels.py``: the numba loops they call (private to the package).
 
 Examples
 --------

@@ -3,7 +3,7 @@
 Imported only by :mod:`particles.backends.fixes`. The NumPy collider works on
 arrays of all the particles that may touch the surface, round after round;
 here each particle is one loop iteration that does its rounds alone, with
-the arithmetic of the NumPy code in its order (:mod:`particles.crossing`:
+the arithmetic of the NumPy code in its order (:mod:`particles.collisions.surface_crossing`:
 the Hermite path, the walk with sphere tracing and the Illinois steps;
 :mod:`particles.collisions`: the response with friction, resting contact,
 the projection). Two passes: :func:`collider_candidates` marks the
@@ -14,7 +14,7 @@ round (the last slot: the projection), so that the contacts come out in the
 NumPy collider's order. Particles are independent: the same bits on any
 number of threads.
 
-The surfaces are the primitives of :mod:`particles.surfaces`, as a kind and
+The surfaces are the primitives of :mod:`particles.collisions.surfaces`, as a kind and
 a row of numbers (:data:`PLANE`, :data:`SPHERE`, :data:`BOX`,
 :data:`CYLINDER`; see ``particles.backends.fixes.surface_row``); the third
 coordinate of a 2D point is 0.
@@ -25,8 +25,8 @@ import math
 from ._kernels import _jit, prange
 
 PLANE, SPHERE, BOX, CYLINDER = 0, 1, 2, 3
-CROSSING_TOL, INSIDE_TOL = 1e-12, 1e-9  # particles.crossing's tolerances
-ROUNDOFF_DEPTH = 1e-12  # particles.collisions.ROUNDOFF_DEPTH
+CROSSING_TOL, INSIDE_TOL = 1e-12, 1e-9  # particles.collisions.surface_crossing's tolerances
+ROUNDOFF_DEPTH = 1e-12  # particles.collisions.collider.ROUNDOFF_DEPTH
 ITERATIONS = 60  # first_crossing's regula falsi iterations
 
 
@@ -150,7 +150,7 @@ def surface_closest(kind, P, d, x0, x1, x2):
 
 @_jit()
 def _path_speed(x0, v0, x1, v1, h):
-    """``|c| + |h v0 - c| + |h v1 - c|``, c = x1 - x0: a bound on ``|dx/ds|`` (particles.crossing.path_speed)."""
+    """``|c| + |h v0 - c| + |h v1 - c|``, c = x1 - x0: a bound on ``|dx/ds|`` (surface_crossing.path_speed)."""
     s0, s1, s2 = 0.0, 0.0, 0.0
     for a in range(3):
         chord = x1[a] - x0[a]
@@ -162,7 +162,7 @@ def _path_speed(x0, v0, x1, v1, h):
 
 @_jit()
 def _cubic(c, s):
-    """``c0 + s (c1 + s (c2 + s c3))`` per coordinate (particles.crossing.cubic_path)."""
+    """``c0 + s (c1 + s (c2 + s c3))`` per coordinate (particles.collisions.surface_crossing.cubic_path)."""
     return (c[0][0] + s * (c[1][0] + s * (c[2][0] + s * c[3][0])),
             c[0][1] + s * (c[1][1] + s * (c[2][1] + s * c[3][1])),
             c[0][2] + s * (c[1][2] + s * (c[2][2] + s * c[3][2])))
@@ -170,7 +170,7 @@ def _cubic(c, s):
 
 @_jit()
 def _hermite(x0, v0, x1, v1, h, s):
-    """Position and velocity at fraction s of the step (particles.crossing.hermite)."""
+    """Position and velocity at fraction s of the step (particles.collisions.surface_crossing.hermite)."""
     s2, s3 = s * s, s * s * s
     b0, b1, b2, b3 = 2 * s3 - 3 * s2 + 1, (s3 - 2 * s2 + s) * h, 3 * s2 - 2 * s3, (s3 - s2) * h
     db0, db1, db3 = (6 * s2 - 6 * s) / h, 3 * s2 - 4 * s + 1, 3 * s2 - 2 * s
@@ -183,7 +183,7 @@ def _hermite(x0, v0, x1, v1, h, s):
 
 @_jit()
 def _first_crossing(kind, P, d, x0, v0, x1, v1, h, samples, lipschitz):
-    """First entry ``(s, s_in)`` of the Hermite path into the solid (particles.crossing.first_crossing)."""
+    """First entry ``(s, s_in)`` of the Hermite path into the solid (surface_crossing.first_crossing)."""
     c = ((x0[0], x0[1], x0[2]), (h * v0[0], h * v0[1], h * v0[2]),
          (3 * (x1[0] - x0[0]) - h * (2 * v0[0] + v1[0]), 3 * (x1[1] - x0[1]) - h * (2 * v0[1] + v1[1]),
           3 * (x1[2] - x0[2]) - h * (2 * v0[2] + v1[2])),
@@ -233,7 +233,7 @@ def _first_crossing(kind, P, d, x0, v0, x1, v1, h, samples, lipschitz):
 
 @_jit()
 def _respond(v, n, eps, mu):
-    """Velocity after the contact, and the normal and friction changes (particles.collisions._respond)."""
+    """Velocity after the contact, and the normal and friction changes (particles.collisions.collider._respond)."""
     vn = _dot(v[0], v[1], v[2], n[0], n[1], n[2])
     vt = (v[0] - vn * n[0], v[1] - vn * n[1], v[2] - vn * n[2])
     vn = min(vn, 0.0)

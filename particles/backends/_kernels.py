@@ -251,7 +251,7 @@ def take_rows(x, perm, xs):
 
 @_jit()
 def integer_power(p):
-    """``int(p)`` when particles.lennardjones._power computes ``u ** p`` as repeated products (1..16), else 0."""
+    """``int(p)`` when particles.forces.lennardjones._power computes ``u ** p`` as repeated products (1..16), else 0."""
     return int(p) if p == math.floor(p) and 1 <= p <= 16 else 0
 
 

@@ -92,7 +92,7 @@ def bending(force, F, x):
 
 
 def lennard_jones(force, F, x, perm, i, j, box):
-    """:meth:`particles.lennardjones.LennardJones.add_to` on its Verlet list, compiled; returns the virial.
+    """:meth:`particles.forces.lennardjones.LennardJones.add_to` on its Verlet list, compiled; returns the virial.
 
     The list sorted by first rank (again only when it is rebuilt) and cut
     into a fixed number of blocks of ranks (set by the particle count, not
@@ -123,7 +123,7 @@ def lennard_jones(force, F, x, perm, i, j, box):
 
 
 def nbody(force, F, x, m):
-    """:meth:`particles.nbody.NBodyGravity.add_to`, compiled: one thread per particle over all others."""
+    """:meth:`particles.forces.nbody.NBodyGravity.add_to`, compiled: one thread per particle over all others."""
     m = np.ascontiguousarray(m, dtype=np.float64)
     pick(nbody_sums, len(x) ** 2)(F, _float_rows(x), m, force.G, force.softening**2)
 
@@ -146,7 +146,7 @@ def _batch_arrays(constraints, b, hs, formulation):
 
 
 def distance_project(constraints, b, x, x_n, lam, hs, formulation):
-    """:meth:`particles.pbdconstraints.Distance.project` of batch `b`, compiled, on x (d, n) in place."""
+    """:meth:`particles.xpbd.constraints.Distance.project` of batch `b`, compiled, on x (d, n) in place."""
     store = _batch_arrays(constraints, b, hs, formulation)
     i, j = store["ij"]
     at, inv, gamma = store["coefficients"]
@@ -213,7 +213,7 @@ class CompiledStep:
     (:class:`~particles.springs.Springs`, up to three sets, with their
     damping), the bending joints (:class:`~particles.springs.Bending`) and
     the update of every particle compiled, with air damping
-    (:class:`~particles.fields.Damping`), wind (:class:`~particles.fields.Wind`,
+    (:class:`~particles.forces.fields.Damping`), wind (:class:`~particles.forces.fields.Wind`,
     gusts too) and uniform gravity folded into the update; clamps
     (:class:`~particles.springs.Clamp`) by a compiled kernel of their own;
     every other force added by its own ``add_to`` as in
@@ -232,7 +232,7 @@ class CompiledStep:
     def parts(self, n):
         """The :class:`StepParts` of the system's forces; None when the step does not apply.
 
-        By :attr:`~particles.fields.Force.compiled_role`: up to three
+        By :attr:`~particles.forces.fields.Force.compiled_role`: up to three
         :class:`~particles.springs.Springs` sets, all resolving to numba, in
         2D or 3D; one :class:`~particles.springs.Bending` set that resolves
         to numba; gravity, damping, wind and clamps of the system's

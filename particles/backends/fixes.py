@@ -13,7 +13,7 @@ numba.
 
 import numpy as np
 
-from ..surfaces import Box, Cylinder, Plane, Sphere
+from ..collisions.surfaces import Box, Cylinder, Plane, Sphere
 from ._collider_kernels import BOX, CYLINDER, PLANE, SPHERE, collider_candidates, collider_resolve
 from ._kernels import incidence, pick
 from ._provot_kernels import largest, provot_average, provot_end, provot_group, provot_start, provot_strains
@@ -71,7 +71,7 @@ def provot(constraint, X, h):
     i, j, L0, wi, wj, movable = (store[k] for k in ("i", "j", "L0", "wi", "wj", "movable"))
     s = len(i)
     limit = 1.0 + constraint.max_strain
-    stop = constraint.max_strain + constraint.tol + 1e-12  # particles.constraints._ROUNDING
+    stop = constraint.max_strain + constraint.tol + 1e-12  # particles.constraints.provot._ROUNDING
     x0 = _buffer(store, "x0", (n, d))
     bworst = _buffer(store, "worst", (max(1, min(STRAIN_BLOCKS, s // 1024)),))
     jacobi = store["groups"] is None

@@ -14,7 +14,7 @@ rows), the linear sets' (isometric bending, clamps, attachments) likewise,
 and a table of segments ``(form, start, stop, width, damped)``, one per
 colour group in sweep order. The coefficients ``alpha / hs^2``, ``1 /
 ((1 + gamma) W + alpha / hs^2)`` and ``gamma`` are the batches' own
-(:meth:`particles.pbdconstraints._ConstraintSet._coefficients`), gathered again when
+(:meth:`particles.xpbd.constraints.ConstraintSet._coefficients`), gathered again when
 ``hs`` changes. Uniform gravity and damping are folded into the prediction
 (:meth:`CompiledSubstep.force_terms`); any other external force is
 evaluated by the solver in NumPy and passed in as accelerations.
@@ -151,7 +151,7 @@ class CompiledSubstep:
     def force_terms(forces, d):
         """The forces as rows the prediction evaluates itself, shape (q, 4); None if one of them it cannot.
 
-        By :attr:`~particles.fields.Force.compiled_role`, in the forces' order:
+        By :attr:`~particles.forces.fields.Force.compiled_role`, in the forces' order:
         uniform gravity ``(0, g)`` and damping, ``(1, d, 0, 0)`` for ``-d v``
         or ``(2, rate, 0, 0)`` for ``-rate m v``. Any other force (wind, a
         force of the user's) is evaluated by the solver in NumPy instead.

@@ -34,6 +34,10 @@ one), returning a :class:`DemoData`, and add its :class:`Demo` entry to
 :data:`DEMOS` below; ``particles demo NAME`` and the tour (which writes a
 short preview of each demo, at 5 frames per second) pick it up. A notebook
 or a test can add one at run time with :func:`register`.
+
+Modules: :mod:`particles.demos.effects` (fountain, fireworks, smoke, genesis), :mod:`particles.demos.collisions`
+(bouncing balls), :mod:`particles.demos.flocks`, :mod:`particles.demos.massspring` (cloth, drape), and
+:mod:`particles.demos.data` (:class:`DemoData`, what every demo returns).
 """
 
 from pathlib import Path

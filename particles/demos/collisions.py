@@ -2,9 +2,10 @@
 
 import numpy as np
 
-from ..collisions import Box, Collider, Plane, Sphere
-from ..colours import palette
-from ..fields import Gravity
+from ..collisions.collider import Collider
+from ..collisions.surfaces import Box, Plane, Sphere
+from ..effects.colours import palette
+from ..forces.fields import Gravity
 from ..system import ParticleSystem
 from .data import DemoData, circle, steps_per_frame
 

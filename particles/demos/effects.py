@@ -7,11 +7,13 @@
 
 import numpy as np
 
-from ..collisions import Collider, Plane
-from ..colours import ColorRamp
-from ..effects import ParticleEffect
-from ..emitters import Cone, Disk, Emitter, ParticleEmitter, Point, SphereSurface
-from ..fields import Attractor, Damping, Gravity, Wind
+from ..collisions.collider import Collider
+from ..collisions.surfaces import Plane
+from ..effects.colours import ColorRamp
+from ..effects.distributions import Cone, Disk, Point, SphereSurface
+from ..effects.effect import ParticleEffect
+from ..effects.emitters import Emitter, ParticleEmitter
+from ..forces.fields import Attractor, Damping, Gravity, Wind
 from .data import DemoData, circle, steps_per_frame
 
 __all__ = ["fountain", "fireworks", "smoke", "genesis", "record_effect"]

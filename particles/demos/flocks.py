@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from ..colours import hsv_to_rgb
-from ..flocking import Boids, Flock, polarization
+from ..effects.colours import hsv_to_rgb
+from ..effects.flocking import Boids, Flock, polarization
 from .data import DemoData, steps_per_frame
 
 __all__ = ["flock"]
@@ -12,7 +12,7 @@ __all__ = ["flock"]
 def flock(seconds=8.0, fps=10, seed=0):
     """200 boids from random headings to one flock (Reynolds' rules), in 2D; the camera follows it.
 
-    The rules and limits of tests/library/test_flocking.py: radius 3 m, separation
+    The rules and limits of tests/library/effects/test_flocking.py: radius 3 m, separation
     0.1, alignment 2, cohesion 0.5, steering at most 3 m/s^2, speeds within
     [0.5, 2] m/s; steps of 1/50 s. Each boid is coloured by its heading.
 

@@ -2,10 +2,11 @@
 
 import numpy as np
 
-from ..cloth import cloth
-from ..collisions import Collider, Plane, Sphere
-from ..constraints import ProvotConstraint
-from ..integrators import symplectic_euler
+from ..collisions.collider import Collider
+from ..collisions.surfaces import Plane, Sphere
+from ..constraints.provot import ProvotConstraint
+from ..integrators.steppers import symplectic_euler
+from ..massspring.cloth import cloth
 from .data import DemoData, circle
 
 __all__ = ["hanging_cloth", "draped_cloth"]

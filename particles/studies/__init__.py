@@ -16,6 +16,7 @@ the command line.
 * :mod:`~particles.studies.pbd`: PBD and XPBD on the curtain and the stiff
   cloth of lecture 7 (effective stiffness against iterations and the step,
   substeps against iterations).
+* :mod:`~particles.studies.report`: the figures and tables of ``particles study``, written to files.
 """
 
 from .order import convergence_study, fit_order, format_table, global_error, plot_convergence

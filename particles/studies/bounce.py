@@ -17,8 +17,9 @@ figure.
 import numpy as np
 
 from .._checks import nonnegative_number, positive_number
-from ..collisions import Collider, Plane
-from ..forces import Gravity
+from ..collisions.collider import Collider
+from ..collisions.surfaces import Plane
+from ..forces.fields import Gravity
 from ..system import ParticleSystem
 
 __all__ = ["bounce_heights", "bounce_study", "plot_bounce_study", "format_bounce_table"]

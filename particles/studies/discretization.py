@@ -19,8 +19,8 @@ heavier and softer as it is refined.
 import numpy as np
 
 from .._checks import count, positive_number
-from ..implicit import relax
-from ..massspring import cloth
+from ..implicit.statics import relax
+from ..massspring.cloth import cloth
 from .order import fit_order
 
 __all__ = ["hanging_cloth", "static_sag", "bounce_period", "discretization_study", "plot_discretization"]

@@ -8,7 +8,8 @@ on a log-log plot of error against ``h`` the points fall on a line of slope
 import numpy as np
 
 from .._checks import as_float_array
-from ..integrators import INTEGRATORS, integrate
+from ..integrators.loop import integrate
+from ..integrators.steppers import INTEGRATORS
 from ..problems import Problem, get_problem
 
 __all__ = ["fit_order", "global_error", "convergence_study", "plot_convergence", "format_table"]

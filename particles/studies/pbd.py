@@ -22,9 +22,9 @@ import time
 import numpy as np
 
 from .._checks import count, positive_number
-from ..implicit import relax
-from ..massspring import cloth
-from ..xpbd import PBD, XPBD
+from ..implicit.statics import relax
+from ..massspring.cloth import cloth
+from ..xpbd.solver import PBD, XPBD
 
 __all__ = ["curtain", "spring_sags", "effective_stiffness", "settled_sag", "pbd_stiffness", "stiffness_study",
            "stiff_cloth", "swing", "small_steps_study", "SAG_TABLE"]

@@ -9,9 +9,9 @@ Provot's constraint keeps every structural and shear spring within 10%.
 import numpy as np
 
 from .._checks import count, positive_number
-from ..constraints import ProvotConstraint
-from ..integrators import symplectic_euler
-from ..massspring import cloth
+from ..constraints.provot import ProvotConstraint
+from ..integrators.steppers import symplectic_euler
+from ..massspring.cloth import cloth
 
 __all__ = ["curtain", "provot_study", "plot_provot"]
 

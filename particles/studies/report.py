@@ -71,8 +71,8 @@ def stability(out):
     """Largest stable step against stiffness, chains, implicit damping, cost."""
     import matplotlib.pyplot as plt
 
-    from .stability import (THEORY_OMEGA_H, chain_max_stable_step, cost_study, damping_factor,
-                            plot_stability, stability_study)
+    from .stability import (chain_max_stable_step, cost_study, damping_factor, plot_stability, stability_study,
+                            THEORY_OMEGA_H)
 
     study = stability_study()
     rows = [{"k": k, "m": study["m"], "method": meth, "h_max_measured": h, "h_max_theory": th}

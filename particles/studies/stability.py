@@ -24,7 +24,7 @@ import time
 import numpy as np
 
 from .._checks import as_float_array, count, method_name, positive_number
-from ..integrators import INTEGRATORS
+from ..integrators.steppers import INTEGRATORS
 from .order import fit_order
 
 __all__ = [
@@ -374,7 +374,7 @@ def cost_study(ks=(1e2, 1e4, 1e6, 1e8), m=1.0, methods=("symplectic_euler", "rk4
         One row per (k, method): ``k``, ``method``, ``h``, ``steps``,
         ``evaluations``, ``seconds``.
     """
-    from ..integrators import integrate
+    from ..integrators.loop import integrate
 
     rows = []
     for k in ks:

@@ -21,8 +21,8 @@ from particles.course.reports import feedback_html, gradescope_results
 from particles.course.records import SubmissionRecord, TestRecord
 
 from ..browser import find_or_install_chromium
-from .grader.exercise_corpus import build
 from .grader import cases_01_integrator_order, cases_02_stiffness, cases_03_provot, cases_04_discretization
+from .grader.exercise_corpus import build
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -53,15 +53,15 @@ def renamed(obj, names):
 
 
 STEP_NAMES = {"f": "rhs", "X": "state", "t": "time", "h": "dt", "X_m": "half", "dX": "slope",
-              "_arguments": "check_inputs", "_evaluate": "slope_of", "midpoint": "midpoint_step"}
+              "check_arguments": "check_inputs", "evaluate": "slope_of", "midpoint": "midpoint_step"}
 STEP_IMPORTS = ("import math\nimport numpy as np\n"
                 "from particles._checks import as_float_array, finite_real, positive_number\n")
 
 
 def copied_midpoint(extra_line=""):
     """A midpoint_step cell that pastes the library's midpoint and its two helpers under new names."""
-    helpers = renamed(particles.integrators._arguments, STEP_NAMES) + renamed(particles.integrators._evaluate,
-                                                                              STEP_NAMES)
+    common = particles.integrators.common
+    helpers = renamed(common.check_arguments, STEP_NAMES) + renamed(common.evaluate, STEP_NAMES)
     step = renamed(particles.integrators.midpoint, STEP_NAMES)
     if extra_line:
         step = step.replace("    state, dt = check_inputs", f"    {extra_line}\n    state, dt = check_inputs")
@@ -83,31 +83,32 @@ def test_renamed_copy_of_library_midpoint_is_identical(tmp_path):
     write(tmp_path, "ada", EX01, replace={"midpoint_step": copied_midpoint()})
     report = similarity([tmp_path], root=ROOT)
     found = pairs_of(report, "ada")
-    assert ("midpoint_step", "library: particles.integrators.midpoint", 1.0, "identical") in found
+    assert ("midpoint_step", "library: particles.integrators.steppers.midpoint", 1.0, "identical") in found
     # the renaming also changed the error messages ('state must be finite'): the same structure, other constants
-    assert ("check_inputs", "library: particles.integrators._arguments", 1.0, "identical up to constants") in found
-    assert ("slope_of", "library: particles.integrators._evaluate", 1.0, "identical up to constants") in found
-    where = next(p for p in report.pairs if p.b.name == "particles.integrators.midpoint" or
-                 p.a.name == "particles.integrators.midpoint")
+    assert ("check_inputs", "library: particles.integrators.common.check_arguments", 1.0,
+            "identical up to constants") in found
+    assert ("slope_of", "library: particles.integrators.common.evaluate", 1.0, "identical up to constants") in found
+    where = next(p for p in report.pairs if p.b.name == "particles.integrators.steppers.midpoint" or
+                 p.a.name == "particles.integrators.steppers.midpoint")
     lib, student = sorted((where.a, where.b), key=lambda f: f.kind)
-    assert lib.path == "particles/integrators.py" and lib.line == inspect.getsourcelines(
+    assert lib.path == "particles/integrators/steppers.py" and lib.line == inspect.getsourcelines(
         particles.integrators.midpoint)[1] + 1  # below the decorator
     assert student.path == f"ada/{EX01}.ipynb" and student.cell == "code cell 3" and student.role == "asked"
 
 
 def test_renamed_copy_of_the_string_builder_is_identical(tmp_path):
-    """particles.massspring.string (from particles.strands) pasted, names changed, helpers imported: identical."""
+    """particles.massspring.string (from particles.massspring.strands) pasted, names changed, helpers imported: identical."""
     # keyword arguments (m=m, springs=[springs], pinned=pinned) keep their names: they are the callee's API
     names = {"string": "make_chain", "n": "count", "length": "L", "x": "pos", "i": "idx", "direction": "u"}
     cell = ("import numpy as np\nfrom particles.massspring import MassSpringSystem\n"
-            "from particles.strands import _chain, _chain_parameters\n"
-            "from particles.springsystem import common_forces\n"
+            "from particles.massspring.strands import _chain, _chain_parameters\n"
+            "from particles.massspring.model import common_forces\n"
             "from particles.springs import Springs\n\n"
             + renamed(particles.massspring.string, names)
             + "\n\ndef run(f, X0, t0, h, n_steps):\n    system = make_chain(3)\n    return system.X, n_steps\n")
     write(tmp_path, "ada", EX00, replace={"run": cell})
     found = pairs_of(similarity([tmp_path], root=ROOT), "ada")
-    assert ("make_chain", "library: particles.strands.string", 1.0, "identical") in found
+    assert ("make_chain", "library: particles.massspring.strands.string", 1.0, "identical") in found
 
 
 def test_two_students_with_the_same_code_under_other_names(tmp_path):
@@ -163,7 +164,7 @@ def test_independent_rewrite_is_not_flagged_against_the_library(tmp_path):
     report = similarity([tmp_path], root=ROOT, threshold=0.6)
     found = pairs_of(report, "cyd")
     assert not [p for p in found if p[0] in ("rk4_step", "midpoint_step")], found
-    library = fingerprint(inspect.getsource(particles.integrators), "rk4")
+    library = fingerprint(inspect.getsource(particles.integrators.steppers), "rk4")
     ours = fingerprint("import numpy as np\n" + textwrap.dedent(rk4))
     assert score(library, ours) < 0.5
 
@@ -173,7 +174,7 @@ def test_near_copy_with_one_extra_line_scores_above_threshold(tmp_path):
     write(tmp_path, "dan", EX01, replace={"midpoint_step": copied_midpoint("assert dt > 0, 'dt must be positive'")})
     report = similarity([tmp_path], root=ROOT)
     (hit,) = [p for p in pairs_of(report, "dan")
-              if p[:2] == ("midpoint_step", "library: particles.integrators.midpoint")]
+              if p[:2] == ("midpoint_step", "library: particles.integrators.steppers.midpoint")]
     assert hit[3] == "similar" and 0.8 <= hit[2] < 1.0
     assert hit[2] == pytest.approx(2 * 36 / (36 + 41), abs=1e-3)  # 36 nodes plus the 5 of the assert
     assert not [p for p in pairs_of(similarity([tmp_path], root=ROOT, threshold=0.95), "dan")
@@ -230,7 +231,7 @@ def test_cli_prints_a_table_and_writes_csv_and_markdown(tmp_path, capsys):
     code = main(["similarity", str(tmp_path / "subs"), "--out", str(tmp_path / "out"), "--root", str(ROOT)])
     assert code == 0
     out = capsys.readouterr().out
-    assert "2 submissions" in out and "particles.integrators.midpoint" in out and "identical" in out
+    assert "2 submissions" in out and "particles.integrators.steppers.midpoint" in out and "identical" in out
     rows = list(csv.DictReader(open(tmp_path / "out" / "similarity.csv")))
     assert {"cluster", "score", "match", "owner_a", "function_a", "line_a", "owner_b", "function_b"} <= set(rows[0])
     assert any({r["owner_a"], r["owner_b"]} == {"ada", "library"} and r["score"] == "1.000" for r in rows)
@@ -368,5 +369,5 @@ def test_planted_copies_are_found_among_many_distinct_submissions(tmp_path):
 def test_library_functions_that_only_delegate_are_no_references():
     """A library function whose body is ``return g(...)`` is not compared; one with more to it is."""
     names = {f.name for f in library_functions()}
-    assert "particles._sweep.candidates_touching" not in names  # return candidates_in_boxes(...)
-    assert "particles._sweep.candidates_in_boxes" in names and "particles.integrators.midpoint" in names
+    assert "particles.collisions.candidates.candidates_touching" not in names  # return candidates_in_boxes(...)
+    assert "particles.collisions.candidates.candidates_in_boxes" in names and "particles.integrators.steppers.midpoint" in names

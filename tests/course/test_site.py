@@ -35,7 +35,7 @@ frames = [np.random.default_rng(0).random((5, 2)) + 0.1 * k for k in range(4)]
 HTML(render.to_html(render.animate(frames)))"""
 
 EXPLORATION = """from particles.explore import Exploration, bouncing_ball
-from particles.render import plot_bounces
+from particles.explore.figures import plot_bounces
 Exploration(run=bouncing_ball, draw=plot_bounces, parameter=("eps", [0.5, 0.8, 1.0]), value=0.8)"""
 
 EQUATIONS = ("The energy $E = \\tfrac12 m |\\mathbf v|^2$ is kept, and\n\n"

@@ -32,8 +32,7 @@ from particles.course.expect import expect_array, expect_float
 from particles.course.runner import GradingFailure, describe_value
 from particles.forces import Gravity
 from particles.massspring import cloth
-from particles.pbdconstraints import color_constraints
-from particles.xpbd import XPBD, Distance, distance_pass
+from particles.xpbd import XPBD, Distance, color_constraints, distance_pass
 
 EXERCISE = "05_xpbd"
 FORBIDDEN = {

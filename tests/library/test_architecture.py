@@ -14,23 +14,14 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGE = ROOT / "particles"
 
-# Lazy imports that close a circle, each kept on purpose.
-KNOWN_LAZY_CIRCLES = {
-    frozenset({"particles.implicit", "particles.statics"}):
-        "`from particles.implicit import relax` (relax's old home) resolves lazily to particles.statics, "
-        "which uses the implicit solvers",
-}
+# Lazy imports that close a circle, each kept on purpose: none (the test requires this to stay empty).
+KNOWN_LAZY_CIRCLES = {}
 
-# Private names imported from another (non-private) module, in modules this layout does not own yet.
-KNOWN_PRIVATE_IMPORTS = {
-    ("particles.thermostats", "particles.integrators", "_arguments"),
-    ("particles.thermostats", "particles.integrators", "_evaluate"),
-    ("particles.thermostats", "particles.integrators", "_split"),
-    ("particles.xpbd", "particles.pbdconstraints", "_ConstraintSet"),
-}
+# Private names imported from another (non-private) module: none (the test requires this to stay empty).
+KNOWN_PRIVATE_IMPORTS = set()
 
 # The modules that may draw (import Matplotlib at module level) and those that belong to the grader.
-DRAWING = {"particles.render"}
+DRAWING = {"particles.render", "particles.explore.figures"}
 GRADER_USERS = {"particles", "particles.cli"}  # the console command, and particles.check()
 
 
@@ -124,15 +115,16 @@ def test_the_module_level_import_graph_is_acyclic():
 
 
 def test_lazy_imports_close_no_other_circle():
-    """With the imports inside functions too, the only circles are the documented ones."""
+    """With the imports inside functions too, no two modules import each other."""
     circles = {frozenset(c) for c in _cycles(_edges(lazy=True))}
-    assert circles <= set(KNOWN_LAZY_CIRCLES), [sorted(c) for c in circles - set(KNOWN_LAZY_CIRCLES)]
+    assert KNOWN_LAZY_CIRCLES == {}
+    assert sorted(sorted(c) for c in circles) == []
 
 
 def test_demos_and_effects_import_no_circle():
     """The demo registry is explicit (no module registers itself by importing it), effects and emitters are one-way."""
     graph = _edges(lazy=True)
-    assert "particles.effects" not in graph["particles.emitters"]
+    assert "particles.effects.effect" not in graph["particles.effects.emitters"]
     assert not any(target == "particles.demos" for target in graph["particles.demos.massspring"])
     assert {f"particles.demos.{m}" for m in ("effects", "collisions", "flocks", "massspring")} <= graph[
         "particles.demos"]
@@ -140,7 +132,7 @@ def test_demos_and_effects_import_no_circle():
 
 @pytest.mark.parametrize("name", sorted(LIBRARY - DRAWING))
 def test_physics_modules_do_not_import_matplotlib_when_loaded(name):
-    """Only particles.render imports Matplotlib at module level; the others do so, if at all, when drawing."""
+    """Only particles.render and the explorations' figures import Matplotlib at module level."""
     loaded = [(target, line) for target, _, lazy, line in IMPORTS[name]
               if not lazy and target.split(".")[0] in ("matplotlib", "mpl_toolkits")]
     assert loaded == []
@@ -162,7 +154,8 @@ def test_no_private_helper_is_imported_from_another_module():
             if target.startswith("particles") and not private_module:
                 found |= {(name, target, n) for n in names if n.startswith("_") and not n.startswith("__")}
     found = {f for f in found if f[:2] != ("particles", "particles.course.check")}  # check's lazy import
-    assert found <= KNOWN_PRIVATE_IMPORTS, sorted(found - KNOWN_PRIVATE_IMPORTS)
+    assert KNOWN_PRIVATE_IMPORTS == set()
+    assert sorted(found) == []
 
 
 def test_one_unit_vector_helper():
@@ -194,8 +187,9 @@ def test_one_time_loop():
         text = MODULES[name].read_text(encoding="utf-8")
         loops += [f"{name}: {line.strip()}" for line in text.splitlines()
                   if re.search(r"for \w+ in range\(1, len\(times\)\)", line)]
-        grids += [name for target, names, _, _ in IMPORTS[name] if "step_times" in names]
-    assert loops == ["particles.integrators: for k in range(1, len(times)):"]
+        grids += [name for target, names, _, _ in IMPORTS[name]
+                  if "step_times" in names and name != "particles.integrators"]  # the package re-exports it
+    assert loops == ["particles.integrators.loop: for k in range(1, len(times)):"]
     assert grids == []
 
 
@@ -219,3 +213,123 @@ def test_every_test_says_what_it_checks():
                 if not (ast.get_docstring(node) or "").strip():
                     missing.append(f"{path.relative_to(ROOT)}::{node.name}")
     assert missing == []
+
+
+# --- the layout a newcomer walks -------------------------------------------------------------------
+
+PACKAGES = sorted(name.split(".")[1] for name, path in MODULES.items()
+                  if path.name == "__init__.py" and name.count(".") == 1)
+ROOT_LIMIT, LINE_LIMIT = 15, 600
+# Tests of a concept that spans a package rather than one module (besides test_<package>.py).
+CONCEPT_TESTS = {"test_architecture", "test_force_contract", "test_md_nist"}
+
+
+def test_the_root_holds_only_what_every_area_shares():
+    """particles/ holds at most 15 modules; everything else lives in a package of its area."""
+    root = sorted(p.name for p in PACKAGE.glob("*.py"))
+    assert len(root) <= ROOT_LIMIT, root
+
+
+def test_no_module_is_over_600_lines():
+    """No module of the package (library and course tools) is longer than 600 lines."""
+    long = {name: n for name in MODULES if (n := len(MODULES[name].read_text(encoding="utf-8").splitlines())) > LINE_LIMIT}
+    assert long == {}
+
+
+@pytest.mark.parametrize("package", [p for p in PACKAGES if p != "course"])
+def test_each_package_docstring_is_its_map(package):
+    """The docstring of each package's __init__ names every module of the package."""
+    init = PACKAGE / package / "__init__.py"
+    doc = ast.get_docstring(ast.parse(init.read_text(encoding="utf-8"))) or ""
+    modules = sorted(p.stem for p in (PACKAGE / package).glob("*.py") if p.name != "__init__.py")
+    missing = [m for m in modules if not re.search(rf"particles\.{package}\.{m}\b|`{m}(\.py)?`|{package}/{m}\.py", doc)]
+    assert missing == []
+
+
+def test_library_tests_mirror_the_packages():
+    """tests/library/<package>/test_<module>.py tests particles/<package>/<module>.py (or the package, or a concept)."""
+    tests = ROOT / "tests" / "library"
+    wrong = []
+    for path in sorted(tests.rglob("test_*.py")):
+        parts = path.relative_to(tests).parts
+        package = "particles" + "".join(f".{p}" for p in parts[:-1])
+        stem = path.stem
+        if package != "particles" and not (package in MODULES and MODULES[package].name == "__init__.py"):
+            wrong.append(f"{path.relative_to(ROOT)}: no package {package}")
+        elif not (f"{package}.{stem[5:]}" in MODULES or stem[5:] == package.rpartition(".")[2] or stem in CONCEPT_TESTS):
+            wrong.append(f"{path.relative_to(ROOT)}: no module {package}.{stem[5:]}")
+        elif not (path.parent / "__init__.py").exists():
+            wrong.append(f"{path.relative_to(ROOT)}: no __init__.py beside it")
+    assert wrong == []
+
+
+def _section(path, heading):
+    text = (ROOT / path).read_text(encoding="utf-8")
+    return re.search(rf"^## {heading}\n(.*?)(?=^## |\Z)", text, flags=re.M | re.S).group(1)
+
+
+@pytest.mark.parametrize("path, heading", [("README.md", "Layout"), ("CONTRIBUTING.md", "Where to make a change")])
+def test_the_layout_tables_name_every_package(path, heading):
+    """README's layout and CONTRIBUTING's table name exactly the packages of particles/."""
+    named = sorted(set(re.findall(r"`particles/(\w+)/", _section(path, heading))))
+    assert named == PACKAGES
+
+
+def _top_names(module):
+    """Names bound at the top of `module` (definitions, assignments, imports) -> their node."""
+    names = {}
+    for node in ast.parse(MODULES[module].read_text(encoding="utf-8")).body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names[node.name] = node
+        elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            for target in (node.targets if isinstance(node, ast.Assign) else [node.target]):
+                for t in (target.elts if isinstance(target, ast.Tuple) else [target]):
+                    if isinstance(t, ast.Name):
+                        names[t.id] = node
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            for a in node.names:
+                names[(a.asname or a.name).split(".")[0]] = node
+        elif isinstance(node, (ast.If, ast.Try)):
+            for child in ast.walk(node):
+                if isinstance(child, (ast.FunctionDef, ast.ClassDef)):
+                    names[child.name] = child
+                elif isinstance(child, (ast.Import, ast.ImportFrom)):
+                    for a in child.names:
+                        names[(a.asname or a.name).split(".")[0]] = child
+    return names
+
+
+def _resolves(dotted):
+    """Whether `particles.a.b...` names a module of the package or an attribute bound in one."""
+    parts = dotted.split(".")
+    for k in range(len(parts), 0, -1):
+        if ".".join(parts[:k]) in MODULES:
+            break
+    module, rest = ".".join(parts[:k]), parts[k:]
+    if not rest or rest[0].startswith("__"):
+        return True
+    node = _top_names(module).get(rest[0])
+    if node is None:
+        return False
+    if len(rest) > 1 and isinstance(node, ast.ClassDef) and not node.bases:
+        members = {n.name for n in node.body if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))}
+        members |= {t.id for n in node.body if isinstance(n, ast.Assign) for t in n.targets if isinstance(t, ast.Name)}
+        members |= {n.target.id for n in node.body if isinstance(n, ast.AnnAssign) and isinstance(n.target, ast.Name)}
+        return rest[1] in members or rest[1].startswith("__")
+    return True
+
+
+def test_every_dotted_library_name_in_tests_corpora_and_notebooks_exists():
+    """Each `particles.x.y` named in the tests, the grader's corpora, the lectures, masters and exercises exists."""
+    files = [*sorted((ROOT / "tests").rglob("*.py")), *sorted((ROOT / "lectures").glob("*.ipynb")),
+             *sorted((ROOT / "solutions").glob("*.ipynb")), *sorted((ROOT / "exercises").glob("*.ipynb"))]
+    missing = set()
+    for path in files:
+        if path == Path(__file__).resolve():
+            continue  # this file's examples
+        text = path.read_text(encoding="utf-8")
+        for m in re.finditer(r"(?<![\w./-])particles(?:\.[A-Za-z_]\w*)+(?![\w-])", text):
+            name = m.group(0)
+            if not _resolves(name):
+                missing.add(f"{path.relative_to(ROOT)}: {name}")
+    assert sorted(missing) == []

@@ -215,7 +215,7 @@ def test_box_and_bounds_exclude_each_other_and_the_list_checks_its_skin():
 def test_periodic_verlet_list_stores_the_images():
     """The list's minimum_image maps x_i - x_j to the nearest copy, also after moves and for chunks."""
     from particles.forces import pair_differences
-    from particles.periodic import minimum_image
+    from particles.md import minimum_image
 
     rng = np.random.default_rng(6)
     L = np.array([5.0, 6.0, 7.0])

@@ -11,7 +11,7 @@ from PIL import Image  # noqa: E402
 
 from particles import render  # noqa: E402
 from particles.effects import ColorRamp, ParticleEffect  # noqa: E402
-from particles.emitters import Cone, Emitter, Point  # noqa: E402
+from particles.effects import Cone, Emitter, Point  # noqa: E402
 
 # Animations built only to inspect their artists are never rendered; Matplotlib warns when they are freed.
 pytestmark = pytest.mark.filterwarnings("ignore:Animation was deleted without rendering")

@@ -289,8 +289,7 @@ def test_energy_and_momentum_of_a_given_state():
 
 def test_runs_name_t_end_when_it_is_before_the_current_time():
     """ParticleSystem, Flock and ParticleEffect runs all say `t_end`, not the internal t1, when it lies in the past."""
-    from particles.effects import ParticleEffect
-    from particles.flocking import Boids, Flock
+    from particles.effects import Boids, Flock, ParticleEffect
 
     ps = ParticleSystem([[0.0, 0.0]], t=1.0)
     with pytest.raises(ValueError, match=r"t_end must be >= the current time t = 1.0 s of the system, got 0.5"):
@@ -452,7 +451,7 @@ def test_set_state_replaces_the_state_of_the_same_particles():
 
 def test_run_accepts_solver_objects_and_refuses_another_systems():
     """A solver object (step(X, t, h), order) runs in the loop; one built for another system is refused."""
-    from particles.steppers import Solver
+    from particles.integrators import Solver
 
     class ExactDrift(Solver):
         """x' = x + h v: exact for free particles."""
@@ -481,8 +480,8 @@ def test_a_tiny_step_is_one_step():
 
 def test_a_stepper_object_with_a_step_attribute_stays_a_stepper():
     """A thermostat wrapping Verlet (callable, with a .step attribute) is a stepper; a Solver is a solver."""
-    from particles.steppers import Solver, as_stepper, is_solver
-    from particles.thermostats import Berendsen
+    from particles.integrators import Solver, as_stepper, is_solver
+    from particles.md import Berendsen
 
     thermostat = Berendsen(T=1.0, tau=0.1, step="verlet")
     assert not is_solver(thermostat) and as_stepper(thermostat) is thermostat

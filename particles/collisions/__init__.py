@@ -1,0 +1,46 @@
+"""Collisions: particles against implicit surfaces, and cloth meshes against themselves and moving bodies.
+
+Particles (:class:`Collider`) and cloth (:class:`ClothCollisions`, :class:`SelfCollision`) share the
+surfaces; the cloth pipeline of Bridson, Fedkiw and Anderson is built from the mesh, the closest points,
+the continuous test and the broad phase (``from particles.collisions import Collider, Plane``).
+
+* :mod:`particles.collisions.surfaces`: implicit surfaces (:class:`Plane`, :class:`Sphere`, :class:`Box`,
+  :class:`Cylinder`, unions, intersections, complements);
+* :mod:`particles.collisions.moving`: surfaces that move (:class:`MovingSurface`, :class:`RigidlyMoved`);
+* :mod:`particles.collisions.surface_crossing`: where a particle's path within a step crosses a surface
+  (Hermite paths);
+* :mod:`particles.collisions.collider`: :class:`Collider`, particles bouncing off surfaces, with friction and
+  resting contact;
+* :mod:`particles.collisions.mesh`: :class:`TriangleMesh`, the cloth's faces and edges;
+* :mod:`particles.collisions.triangle_crossing`: triangle-triangle intersection tests and the boxes' bucket
+  grid (:func:`box_pairs`);
+* :mod:`particles.collisions.proximity`: closest points of vertex-triangle and edge-edge pairs;
+* :mod:`particles.collisions.ccd`: continuous collision detection: when, within a step, a vertex hits a
+  triangle or two edges meet;
+* :mod:`particles.collisions.candidates`: the broad phase: pairs whose swept boxes overlap, kept from step to
+  step (:class:`CandidateCache`);
+* :mod:`particles.collisions.bodies`: the cloth against moving bodies (stage 1 of the pipeline);
+* :mod:`particles.collisions.zones`: impact zones, moved rigidly (stage 4 of the pipeline);
+* :mod:`particles.collisions.pipeline`: :class:`ClothCollisions`, the Bridson-Fedkiw-Anderson stages applied
+  after each step;
+* :mod:`particles.collisions.selfcollision`: :class:`SelfCollision`, a mass-spring cloth's particles kept a
+  thickness apart.
+"""
+
+from .ccd import BISECTIONS, F_TOL, Impacts, coplanarity_cubic, cubic_roots, detect, first_contact, overlapping
+from .collider import Collider, Contacts, respond
+from .mesh import TriangleMesh
+from .moving import MovingSurface, RigidlyMoved, rotation_matrix
+from .pipeline import ClothCollisionResult, ClothCollisions
+from .proximity import PARALLEL, Closest, edge_edge, point_segment, vertex_face
+from .selfcollision import SelfCollision, SelfCollisionResult
+from .surface_crossing import cubic_path, first_crossing, hermite, hermite_coefficients, path_speed
+from .surfaces import Box, Complement, Cylinder, Intersection, Plane, Sphere, Surface, Union
+from .triangle_crossing import box_pairs, intersections, orientation
+
+__all__ = ["Surface", "Plane", "Sphere", "Box", "Cylinder", "Union", "Intersection", "Complement", "MovingSurface",
+           "RigidlyMoved", "rotation_matrix", "hermite", "hermite_coefficients", "cubic_path", "path_speed",
+           "first_crossing", "respond", "Contacts", "Collider", "TriangleMesh", "intersections", "box_pairs",
+           "orientation", "Closest", "point_segment", "vertex_face", "edge_edge", "PARALLEL", "cubic_roots",
+           "coplanarity_cubic", "Impacts", "overlapping", "first_contact", "detect", "BISECTIONS", "F_TOL",
+           "ClothCollisions", "ClothCollisionResult", "SelfCollision", "SelfCollisionResult"]

@@ -1,0 +1,212 @@
+"""Broad phase of cloth collisions: which vertex-face and edge-edge pairs can touch within a step.
+
+The box swept by each vertex, face and edge over a step, inflated by a pad, is put in the bucket grid of
+:func:`particles.collisions.triangle_crossing.box_pairs`; only pairs whose boxes overlap go on to the
+narrow phase (:mod:`particles.collisions.proximity`, :mod:`particles.collisions.ccd`). Pairs that share a
+vertex touch by construction and are left out. :class:`CandidateCache` keeps the pairs from step to step,
+as a Verlet list keeps neighbours, for the pipeline of :mod:`particles.collisions.pipeline`.
+"""
+
+import numpy as np
+
+from .triangle_crossing import box_pairs
+
+__all__ = ["element_boxes", "candidate_elements", "candidates_in_boxes", "pair_rows", "candidate_pairs",
+           "boxes_overlap", "candidates_touching", "merge_keys", "CandidateCache"]
+
+
+def _boxes(x0, x1, index, pad):
+    """Boxes around the points `index` (shape (k, j)) at both ends of the step, inflated by `pad`."""
+    lo = np.minimum(x0[index].min(axis=1), x1[index].min(axis=1))
+    hi = np.maximum(x0[index].max(axis=1), x1[index].max(axis=1))
+    return lo - pad, hi + pad
+
+
+def element_boxes(mesh, x0, x1, pad):
+    """Swept, inflated boxes of the vertices, faces and edges: ``(lo, hi)`` of each, in that order."""
+    return (_boxes(x0, x1, np.arange(mesh.n)[:, None], pad), _boxes(x0, x1, mesh.faces, pad),
+            _boxes(x0, x1, mesh.edges, pad))
+
+
+def candidate_elements(mesh, x0, x1, pad, vertices=None):
+    """Vertex-face pairs ``(iv, jf)`` and edge pairs ``(ie, je)`` (``ie < je``) with overlapping boxes.
+
+    Pairs with a common vertex are left out; with a mask `vertices`, only
+    pairs that hold one of them. Each list is sorted by its key
+    ``iv m + jf`` (``ie e + je``).
+    """
+    lo, hi = np.minimum(x0, x1), np.maximum(x0, x1)
+    return candidates_in_boxes(mesh, lo, hi, pad, vertices)
+
+
+def candidates_in_boxes(mesh, lo, hi, pad, vertices=None, pairs=box_pairs):
+    """:func:`candidate_elements` from the vertices' boxes ``(lo, hi)`` (faces and edges get their union).
+
+    `pairs(lo_a, hi_a, lo_b, hi_b)` finds the overlapping boxes of the masked search (default: the grid of
+    :func:`particles.collisions.triangle_crossing.box_pairs`).
+    """
+    F, E = mesh.faces, mesh.edges
+    v_lo, v_hi = lo - pad, hi + pad
+    f_lo, f_hi = v_lo[F].min(axis=1), v_hi[F].max(axis=1)
+    e_lo, e_hi = v_lo[E].min(axis=1), v_hi[E].max(axis=1)
+    if vertices is None:
+        iv, jf = box_pairs(v_lo, v_hi, f_lo, f_hi)
+        ie, je = box_pairs(e_lo, e_hi)
+    else:
+        sv = np.flatnonzero(vertices)
+        sf = np.flatnonzero(vertices[F].any(axis=1))
+        se = np.flatnonzero(vertices[E].any(axis=1))
+        a, b = pairs(v_lo[sv], v_hi[sv], f_lo, f_hi)
+        c, d = pairs(v_lo, v_hi, f_lo[sf], f_hi[sf])
+        keys = np.unique(np.concatenate([sv[a] * len(F) + b, c * len(F) + sf[d]]))
+        iv, jf = np.divmod(keys, max(len(F), 1))
+        a, b = pairs(e_lo[se], e_hi[se], e_lo, e_hi)
+        a = se[a]
+        keys = np.unique(np.minimum(a, b) * len(E) + np.maximum(a, b))
+        ie, je = np.divmod(keys, max(len(E), 1))
+        keep = ie != je
+        ie, je = ie[keep], je[keep]
+    keep = ~(F[jf] == iv[:, None]).any(axis=1)  # the vertex is not a corner of the face
+    iv, jf = iv[keep], jf[keep]
+    keep = ~(E[ie][:, :, None] == E[je][:, None, :]).any(axis=(1, 2))  # no common vertex
+    return iv.astype(np.int64), jf.astype(np.int64), ie[keep].astype(np.int64), je[keep].astype(np.int64)
+
+
+def pair_rows(mesh, iv, jf, ie, je):
+    """The four vertices of each pair: ``(vertex, a, b, c)`` and ``(p_1, p_2, q_1, q_2)``."""
+    vf = np.concatenate([iv[:, None], mesh.faces[jf]], axis=1)
+    ee = np.concatenate([mesh.edges[ie], mesh.edges[je]], axis=1)
+    return vf.astype(np.int64), ee.astype(np.int64)
+
+
+def candidate_pairs(mesh, x0, x1, pad, vertices=None):
+    """:func:`particles.collisions.ccd.candidates` without the checks."""
+    return pair_rows(mesh, *candidate_elements(mesh, x0, x1, pad, vertices))
+
+
+def boxes_overlap(boxes_a, boxes_b, ia, ib):
+    """Whether boxes ``ia`` of one set overlap boxes ``ib`` of another (each set a pair ``(lo, hi)``)."""
+    (lo_a, hi_a), (lo_b, hi_b) = boxes_a, boxes_b
+    return np.all((lo_a[ia] <= hi_b[ib]) & (lo_b[ib] <= hi_a[ia]), axis=1)
+
+
+def _overlap_matrix(lo_a, hi_a, lo_b, hi_b):
+    """All overlapping pairs of a few boxes A with boxes B, by testing every pair (rows of A in chunks)."""
+    I, J = [], []
+    step = max(1, 2_000_000 // max(len(lo_b), 1))
+    for s in range(0, len(lo_a), step):  # a loop over chunks of a few rows
+        la, ha = lo_a[s:s + step, None, :], hi_a[s:s + step, None, :]
+        ok = np.all((la <= hi_b[None]) & (lo_b[None] <= ha), axis=2)
+        i, j = np.nonzero(ok)
+        I.append(i + s)
+        J.append(j)
+    if not I:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    return np.concatenate(I).astype(np.int64), np.concatenate(J).astype(np.int64)
+
+
+def candidates_touching(mesh, lo, hi, pad, far):
+    """:func:`candidates_in_boxes` for the pairs with a vertex in `far` only, testing them against every box.
+
+    For a few vertices (a grid search costs the same whatever their number).
+    """
+    return candidates_in_boxes(mesh, lo, hi, pad, far, pairs=_overlap_matrix)
+
+
+def merge_keys(keys, new):
+    """The sorted union of the sorted unique `keys` and a few `new` ones (inserted, not re-sorted)."""
+    new = np.unique(new)
+    pos = np.searchsorted(keys, new)
+    present = np.zeros(len(new), dtype=bool)
+    inside = pos < len(keys)
+    present[inside] = keys[pos[inside]] == new[inside]
+    return np.insert(keys, pos[~present], new[~present])
+
+
+class CandidateCache:
+    """Candidate pairs of a mesh kept from step to step, searched again only when a vertex left its box.
+
+    The pairs are searched with the boxes of each vertex's motion, padded by ``thickness / 2 + SKIN
+    thickness``, and searched again only when a vertex left its box by more than ``SKIN thickness - eta``.
+    Contacts depend on relative motion only, so boxes are compared in a frame that follows the median
+    displacement (a falling sheet's boxes do not grow with its fall). When only a few vertices left their
+    boxes (at most ``max(FEW, n / 16)``), their boxes grow and they alone are searched again, against
+    every box.
+
+    Parameters
+    ----------
+    mesh : TriangleMesh
+        The cloth's faces and edges.
+    thickness : float
+        The cloth's thickness, in metres.
+    eta : float
+        The narrow phase's tolerance, in metres.
+
+    Attributes
+    ----------
+    searches : int
+        Full searches made so far (the other steps reused or grew the cached pairs).
+    """
+
+    SKIN = 0.5
+    FEW = 64  # up to this many vertices out of their boxes: a search around them only
+
+    def __init__(self, mesh, thickness, eta):
+        self.mesh, self.thickness, self.eta = mesh, thickness, eta
+        self.x0 = self.lo = self.hi = None  # start of the search, the vertices' boxes (in its frame)
+        self.vf = self.ee = None  # sorted keys iv m + jf and ie e + je of the cached pairs
+        self.searches = 0
+
+    def frame(self, x0, dx):
+        """Start and end of each vertex's motion in the frame of the cache (a common translation removed)."""
+        offset = np.median(x0 - self.x0, axis=0) if self.x0 is not None else np.zeros(3)
+        return x0 - offset, x0 + dx - np.median(dx, axis=0) - offset
+
+    def update(self, x0, dx):
+        """Make the cached candidates cover the motion x0 -> x0 + dx; returns its start and end in their frame."""
+        mesh = self.mesh
+        pad = (0.5 + self.SKIN) * self.thickness
+        if self.x0 is not None and self.x0.shape == x0.shape:
+            a, b = self.frame(x0, dx)
+            lo, hi = self.lo, self.hi
+            out = np.maximum(np.maximum(lo - a, a - hi), np.maximum(lo - b, b - hi)).max(axis=1)
+            far = out > self.SKIN * self.thickness - self.eta
+            if not far.any():
+                return a, b
+            if far.sum() <= max(self.FEW, mesh.n // 16):  # grow those vertices' boxes, test them against every box
+                lo[far] = np.minimum(lo[far], np.minimum(a[far], b[far]))
+                hi[far] = np.maximum(hi[far], np.maximum(a[far], b[far]))
+                iv, jf, ie, je = candidates_touching(mesh, lo, hi, pad, far)
+                self.vf = merge_keys(self.vf, iv * mesh.m + jf)
+                self.ee = merge_keys(self.ee, ie * len(mesh.edges) + je)
+                return a, b
+        self.x0 = None
+        a, b = self.frame(x0, dx)
+        lo, hi = np.minimum(a, b), np.maximum(a, b)
+        iv, jf, ie, je = candidates_in_boxes(mesh, lo, hi, pad)
+        self.x0, self.lo, self.hi = x0.copy(), lo, hi
+        self.vf, self.ee = iv * mesh.m + jf, ie * len(mesh.edges) + je
+        self.searches += 1
+        return a, b
+
+    def pairs(self, x0, dx, pad, moved=None):
+        """Cached candidate rows whose boxes, swept over x0 -> x0 + dx, overlap when padded by `pad` / 2 each.
+
+        With a mask `moved` (shape (n,)), only the pairs that hold one of those vertices. Returns the
+        vertex-face rows ``(vertex, a, b, c)`` and the edge-edge rows ``(p_1, p_2, q_1, q_2)``.
+        """
+        mesh = self.mesh
+        a, b = self.update(x0, dx)
+        iv, jf = np.divmod(self.vf, max(mesh.m, 1))
+        ie, je = np.divmod(self.ee, max(len(mesh.edges), 1))
+        if moved is not None:
+            F, E = mesh.faces, mesh.edges
+            keep = moved[iv] | moved[F[jf]].any(axis=1)
+            iv, jf = iv[keep], jf[keep]
+            keep = moved[E[ie]].any(axis=1) | moved[E[je]].any(axis=1)
+            ie, je = ie[keep], je[keep]
+        vb, fb, eb = element_boxes(mesh, a, b, 0.5 * pad)
+        keep = boxes_overlap(vb, fb, iv, jf)
+        iv, jf = iv[keep], jf[keep]
+        keep = boxes_overlap(eb, eb, ie, je)
+        return pair_rows(mesh, iv, jf, ie[keep], je[keep])
