@@ -24,6 +24,8 @@ __all__ = ["ANSWER_PROMPT", "SLOT_KEY", "slot_of", "answer_slots", "questions_of
            "answers_of", "is_blank"]
 
 ANSWER_PROMPT = "*Your answer here.*"
+BEGIN = "### BEGIN SOLUTION"  # the markers of a master's solution blocks (particles.course.release uses them)
+END = "### END SOLUTION"
 SLOT_KEY = "answer"  # under the cell metadata's "particles"
 _QUESTION = re.compile(r"^\s*\*\*Question\s*([0-9]+)?[^*]*\*\*", re.M)
 
@@ -112,8 +114,6 @@ def answers_of(submission, released):
 
 def _master_blocks(notebook):
     """The solution blocks of a master's markdown cells, as texts (a master checked as a submission)."""
-    from .release import BEGIN, END
-
     blocks = []
     for cell in notebook.get("cells", []):
         if cell.get("cell_type") != "markdown":

@@ -29,14 +29,12 @@ from pathlib import Path
 
 import nbformat
 
-from .answers import ANSWER_PROMPT, SLOT_KEY
+from .answers import ANSWER_PROMPT, BEGIN, END, SLOT_KEY
 from .paths import exercise_tests
 
 __all__ = ["BEGIN", "END", "INSTRUCTOR", "ReleaseError", "release_notebook", "render", "release",
            "stale_exercises", "public_tests", "write_bundle", "provided_cells"]
 
-BEGIN = "### BEGIN SOLUTION"
-END = "### END SOLUTION"
 INSTRUCTOR = "### INSTRUCTOR ONLY"
 INSTRUCTOR_TAG = "instructor-only"
 

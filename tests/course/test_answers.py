@@ -32,6 +32,7 @@ def _released():
 
 
 def test_each_solution_block_becomes_an_answer_slot_of_its_own():
+    """Each solution block of a markdown cell becomes an answer slot of its own, below its question."""
     released = _released()
     sources = [c["source"] for c in released["cells"]]
     assert sources == ["Intro.", "**Question 1.** Why?", ANSWER_PROMPT, "**Question 2.** How?", ANSWER_PROMPT,
@@ -56,6 +57,7 @@ def _answer(released, k, text, keep_metadata=True):
     ("", False), ("   \n", False), (ANSWER_PROMPT, False), ("*Your answer here.*\n\n", False),
     ("Because the force depends on t.", True), (ANSWER_PROMPT + "\nIt doubles.", True)])
 def test_a_slot_is_blank_when_it_holds_nothing_but_the_prompt(text, answered):
+    """A slot holding nothing, white space or the prompt is blank; any text is an answer (by metadata or by id)."""
     released = _released()
     for keep in (True, False):  # found by metadata, or by its id when an editor dropped the metadata
         counted = count_answers(_answer(released, 2, text, keep), released)
@@ -64,6 +66,7 @@ def test_a_slot_is_blank_when_it_holds_nothing_but_the_prompt(text, answered):
 
 
 def test_an_answer_in_a_cell_of_the_students_own_below_the_prompt_counts():
+    """An answer written in a cell of the student's own below the prompt answers that slot."""
     released = _released()
     notebook = json.loads(json.dumps(released))
     at = next(i for i, c in enumerate(notebook["cells"]) if c["source"] == ANSWER_PROMPT)
@@ -73,6 +76,7 @@ def test_an_answer_in_a_cell_of_the_students_own_below_the_prompt_counts():
 
 
 def test_a_deleted_slot_or_an_unreadable_notebook_answers_nothing(tmp_path):
+    """A deleted slot is blank; an unreadable notebook answered nothing."""
     released = _released()
     notebook = json.loads(json.dumps(released))
     notebook["cells"] = [c for c in notebook["cells"] if c["source"] != ANSWER_PROMPT]
@@ -83,6 +87,7 @@ def test_a_deleted_slot_or_an_unreadable_notebook_answers_nothing(tmp_path):
 
 
 def test_a_master_checked_as_a_submission_has_answered_everything():
+    """A master, whose solution blocks are its answers, answered every question."""
     master = json.loads(json.dumps(_master()))
     assert count_answers(master, _released()) == {"asked": 3, "answered": 3, "blank": []}
 

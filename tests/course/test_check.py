@@ -13,6 +13,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_no_test_collected_is_an_error_not_a_pass(monkeypatch):
+    """A check that collected no test raises CheckError saying nothing was checked."""
     empty = SubmissionRecord(student="you", exercise="00_warmup", notebook="x.ipynb", seed=0, tests=[],
                              notes=["cannot collect"], grader_status=5)
     monkeypatch.setattr(grading, "grade_unit", lambda *a, **k: empty)
@@ -21,6 +22,7 @@ def test_no_test_collected_is_an_error_not_a_pass(monkeypatch):
 
 
 def test_without_pytest_the_check_refuses_before_grading(monkeypatch):
+    """Without pytest the check raises CheckError with the pip command, before grading."""
     real = check_module.importlib.util.find_spec
     monkeypatch.setattr(check_module.importlib.util, "find_spec",
                         lambda name, *a: None if name == "pytest" else real(name, *a))
@@ -30,6 +32,7 @@ def test_without_pytest_the_check_refuses_before_grading(monkeypatch):
 
 
 def test_an_empty_result_never_passes_and_unwritten_functions_are_named():
+    """An empty result never passes; the functions not implemented yet are named, upstream ones too."""
     assert not CheckResult("00_warmup", [], [], "x").passed
     failed = TestRecord(test="t", name="t", points=1, passed=False,
                         reason="`measured_order` calls `rk4_step`, which is not implemented yet")

@@ -65,26 +65,31 @@ def submission():
 
 
 def test_a_provided_cell_runs_with_the_forbidden_function(submission):
+    """A provided cell may use the forbidden function when it loads."""
     assert np.allclose(submission.call("read_first"), [0.9, 1.8])
 
 
 def test_a_student_function_may_call_a_provided_helper(submission):
+    """A student's function may call a provided helper that uses the forbidden function."""
     assert np.allclose(submission.call("mine", [1.0]), [1.8])
     assert submission.code.forbidden_uses("mine", FORBIDDEN) == []
 
 
 def test_the_student_code_itself_is_refused(submission):
+    """The student's own use of the forbidden function is refused, statically and at run time."""
     with pytest.raises(GradingFailure, match="particles.integrators.euler`?,? (is not allowed|which this exercise forbids)"):
         submission.call("cheat", [1.0])
     assert [use for use, _ in submission.code.forbidden_uses("cheat", FORBIDDEN)] == ["particles.integrators.euler"]
 
 
 def test_code_compiled_under_a_provided_cells_name_is_not_trusted(submission):
+    """Code compiled at run time under a provided cell's label is not trusted."""
     with pytest.raises(GradingFailure, match="not allowed in this exercise"):
         submission.call("spoof", [1.0])
 
 
 def test_errors_of_provided_cells_that_follow_from_unwritten_code_are_not_the_students(submission):
+    """NotImplementedError and consequent NameErrors of provided cells are not reported as the student's."""
     submission.call("read_first")  # loaded
     errors = submission.load_errors
     assert {e["type"] for e in errors} == {"NotImplementedError", "NameError"}
@@ -92,6 +97,7 @@ def test_errors_of_provided_cells_that_follow_from_unwritten_code_are_not_the_st
 
 
 def test_a_changed_provided_cell_is_the_students():
+    """A provided cell the student changed is the student's code, under the rules."""
     edited = PROVIDED.replace("h = 0.1", "h = 0.1 (mine)")
     code = SubmissionCode.from_cells([("code cell 1", edited)], provided=[PROVIDED])
     assert not any(c.provided for c in code.chunks) and code.provided_labels == set()
@@ -104,6 +110,7 @@ def test_a_changed_provided_cell_is_the_students():
 
 
 def test_the_provided_cells_of_an_exercise_come_from_its_master():
+    """An exercise's provided cells are its master's code cells without a solution block."""
     from pathlib import Path
 
     root = Path(__file__).resolve().parents[2]

@@ -161,6 +161,7 @@ def _run(python, bundle, jobs):
 
 
 def test_the_student_venv_holds_the_base_install_only(installed):
+    """The student's venv imports the bundle's particles and pytest, and none of the extras."""
     python, bundle, _ = installed
     probe = ("import importlib.util as u, particles, pytest; "
              "print(particles.__file__, [m for m in ('xdist', 'numba', 'ipywidgets') if u.find_spec(m)])")
@@ -170,6 +171,7 @@ def test_the_student_venv_holds_the_base_install_only(installed):
 
 
 def test_every_stub_scores_0_and_names_what_is_left_to_write(installed):
+    """Every untouched stub scores 0, names its unwritten functions, 0 of N answers, no provided-cell error."""
     python, bundle, notebooks = installed
     results = _run(python, bundle, {ex: str(stub) for ex, (stub, _) in notebooks.items()})
     for exercise, (stub, _) in notebooks.items():
@@ -186,6 +188,7 @@ def test_every_stub_scores_0_and_names_what_is_left_to_write(installed):
 
 
 def test_every_finished_exercise_gets_full_marks(installed):
+    """Every exercise filled in with its master's solutions scores full marks, N of N answers, no provided-cell error."""
     python, bundle, notebooks = installed
     results = _run(python, bundle, {ex: str(done) for ex, (_, done) in notebooks.items()})
     for exercise, (_, done) in notebooks.items():
@@ -201,6 +204,7 @@ def test_every_finished_exercise_gets_full_marks(installed):
 
 
 def test_without_pytest_the_check_refuses_with_the_command_that_fixes_it(installed, tmp_path):
+    """In a student venv without pytest the check raises CheckError naming the command that installs it."""
     _, bundle, notebooks = installed
     python = student_venv(tmp_path / "venv", bundle, without={"pytest"})
     stub = str(notebooks[EXERCISES[0]][0])
