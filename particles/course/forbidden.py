@@ -95,34 +95,39 @@ def forbidden_uses(code, name, forbidden):
         if match and match not in {h for h, _ in found}:
             found.append((match, via or [name]))
 
-    def resolve(root, rest, before, via, depth=0):
+    def resolve(root, rest, before, via, depth=0, course=False):
         """Follow the notebook's binding of `root` in force before statement `before`."""
         providers = code._in_force(root, before)
         star = _star_path(code, root, before, providers[0].index if providers else -1)
         if star:
-            hit(star + rest, via)
+            if not course:
+                hit(star + rest, via)
             return
         for p in providers:
             node = p.node
             if p.kind == "import":
-                hit((import_path(node, root) or root) + rest, via)
+                if not course:  # the course's own cells may use the library's names
+                    hit((import_path(node, root) or root) + rest, via)
             elif (isinstance(node, ast.Assign) and p.binds == {root} and len(node.targets) == 1
                   and isinstance(node.targets[0], ast.Name) and dotted(node.value) and depth < 20):
                 alias = dotted(node.value)  # `I = particles.integrators`, `step = euler`
                 head, _, tail = alias.partition(".")
-                resolve(head, ("." + tail if tail else "") + rest, p.index, via, depth + 1)
-            elif p not in seen and p.label not in code.provided_labels:  # the course's own cells may
+                resolve(head, ("." + tail if tail else "") + rest, p.index, via, depth + 1,
+                        course or p.label in code.provided_labels)
+            elif p not in seen:
                 seen.add(p)
                 queue.append((p, via + [root]))
 
     resolve(name, "", None, [])
     while queue:
         s, via = queue.pop(0)
+        course = s.label in code.provided_labels  # followed for the student's functions it names only
         for ref in s.refs:
             if ref.imported is not None:
-                hit(ref.imported, via)
+                if not course:
+                    hit(ref.imported, via)
             else:
-                resolve(ref.name, ref.chain[len(ref.name):], None if ref.deferred else s.index, via)
+                resolve(ref.name, ref.chain[len(ref.name):], None if ref.deferred else s.index, via, 0, course)
     return found
 
 

@@ -224,6 +224,6 @@ def test_written_answers_are_counted_for_the_instructor(graded, exercise):
     (stub,) = graded["summary"]["students"][f"{exercise}__released_stub"]
     asked = stub["written_answers"]["asked"]
     assert asked >= 1
-    assert master["written_answers"] == {"asked": asked, "answered": asked}
-    assert stub["written_answers"] == {"asked": asked, "answered": 0}
+    assert master["written_answers"] == {"asked": asked, "answered": asked, "blank": []}
+    assert stub["written_answers"] == {"asked": asked, "answered": 0, "blank": list(range(1, asked + 1))}
     assert any(f"Written answers: 0 of {asked} filled in" in note for note in stub["notes"])
