@@ -21,7 +21,7 @@ import re
 from pathlib import Path
 
 __all__ = ["ANSWER_PROMPT", "SLOT_KEY", "slot_of", "answer_slots", "questions_of", "count_answers",
-           "answers_of", "is_blank"]
+           "answers_of", "is_blank", "solution_parts", "answers_note"]
 
 ANSWER_PROMPT = "*Your answer here.*"
 BEGIN = "### BEGIN SOLUTION"  # the markers of a master's solution blocks (particles.course.release uses them)
@@ -112,22 +112,42 @@ def answers_of(submission, released):
             for k, parts in texts.items()}
 
 
+def solution_parts(source):
+    """A markdown cell's text cut at its solution blocks: ``[("text", str) or ("answer", str), ...]``.
+
+    The release makes each block an answer slot of its own; a master checked
+    as a submission answers with the blocks' texts. Empty text between blocks
+    is dropped.
+    """
+    parts, lines, block, inside = [], [], [], False
+    for line in source.split("\n"):
+        if line.strip() == BEGIN:
+            parts.append(("text", "\n".join(lines).strip("\n")))
+            lines, block, inside = [], [], True
+        elif line.strip() == END and inside:
+            parts.append(("answer", "\n".join(block)))
+            inside = False
+        elif inside:
+            block.append(line)
+        else:
+            lines.append(line)
+    parts.append(("text", "\n".join(lines).strip("\n")))
+    return [(part, text) for part, text in parts if part == "answer" or text.strip()]
+
+
 def _master_blocks(notebook):
     """The solution blocks of a master's markdown cells, as texts (a master checked as a submission)."""
-    blocks = []
-    for cell in notebook.get("cells", []):
-        if cell.get("cell_type") != "markdown":
-            continue
-        inside, lines = False, []
-        for line in _source(cell).split("\n"):
-            if line.strip() == BEGIN:
-                inside, lines = True, []
-            elif line.strip() == END and inside:
-                inside = False
-                blocks.append("\n".join(lines))
-            elif inside:
-                lines.append(line)
-    return blocks
+    return [text for cell in notebook.get("cells", []) if cell.get("cell_type") == "markdown"
+            for part, text in solution_parts(_source(cell)) if part == "answer"]
+
+
+def answers_note(written, where=""):
+    """The student's line on their written answers, e.g. "Written answers: 1 of 3 filled in; not written yet: ..."."""
+    blank = written.get("blank") or []
+    missing = f"; not written yet: question{'s' if len(blank) > 1 else ''} {', '.join(map(str, blank))}" \
+        if blank else ""
+    return (f"Written answers: {written['answered']} of {written['asked']} filled in{missing}{where}; they are "
+            "read and graded by your instructor, not by the autograder")
 
 
 def _read(notebook):

@@ -257,6 +257,7 @@ def check(exercise, notebook=None, *, time_limit=None, root=None):
         When the tests cannot run (pytest missing, no test collected): the
         message says what to do. The check never reports a pass it did not test.
     """
+    from .answers import answers_note
     from .discovery import written_answers
     from .grading import Unit, grade_unit
 
@@ -298,11 +299,7 @@ def check(exercise, notebook=None, *, time_limit=None, root=None):
         notes = [n for n in notes if not n.startswith("Written answers:")]
         written = written_answers(saved, root, exercise) if saved is not None else None
         if written and written["asked"]:
-            blank = written.get("blank") or []
-            notes.append(f"Written answers: {written['answered']} of {written['asked']} filled in"
-                         + (f"; not written yet: question{'s' if len(blank) > 1 else ''} "
-                            f"{', '.join(map(str, blank))}" if blank else "")
-                         + f" (counted in the saved {saved.name}: save to update)")
+            notes.append(answers_note(written, f" (counted in the saved {saved.name}: save to update)"))
         elif saved is None:
             notes.append("Written answers: not counted (the saved notebook was not found; "
                          f"check(\"{exercise}\", notebook=\"{exercise}.ipynb\") counts them)")

@@ -50,6 +50,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from . import isolation as isolation_module
+from .answers import answers_note
 from .discovery import Unit, find_submissions, notebook_digest, written_answers
 from .paths import exercise_tests, project_root
 from .process import library_parent
@@ -146,11 +147,7 @@ def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None):
                      "after a timeout or a crash")
     written = written_answers(unit.notebook, root, unit.exercise) if root is not None else None
     if written and written["asked"]:
-        blank = written.get("blank") or []
-        missing = f"; not written yet: question{'s' if len(blank) > 1 else ''} {', '.join(map(str, blank))}" \
-            if blank else ""
-        notes.append(f"Written answers: {written['answered']} of {written['asked']} filled in{missing}; they are "
-                     "read and graded by your instructor, not by the autograder")
+        notes.append(answers_note(written))
     layers = session.isolation or {}
     return SubmissionRecord(
         student=unit.student, exercise=unit.exercise, notebook=str(unit.notebook), seed=seed,

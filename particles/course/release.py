@@ -29,7 +29,7 @@ from pathlib import Path
 
 import nbformat
 
-from .answers import ANSWER_PROMPT, BEGIN, END, SLOT_KEY
+from .answers import ANSWER_PROMPT, BEGIN, END, SLOT_KEY, solution_parts
 from .paths import exercise_tests
 
 __all__ = ["BEGIN", "END", "INSTRUCTOR", "ReleaseError", "release_notebook", "render", "release",
@@ -85,26 +85,6 @@ def _strip_solutions(source, kind, where):
     return "\n".join(out)
 
 
-def _answer_parts(source):
-    """A markdown cell's text cut at its solution blocks: ``[("text", str) or ("answer", None), ...]``.
-
-    Each block becomes an answer slot of its own (see :mod:`particles.course.answers`);
-    empty text between blocks is dropped.
-    """
-    parts, lines, inside = [], [], False
-    for line in source.split("\n"):
-        if line.strip() == BEGIN:
-            parts.append(("text", "\n".join(lines).strip("\n")))
-            parts.append(("answer", None))
-            lines, inside = [], True
-        elif line.strip() == END:
-            inside = False
-        elif not inside:
-            lines.append(line)
-    parts.append(("text", "\n".join(lines).strip("\n")))
-    return [(part, text) for part, text in parts if part == "answer" or text.strip()]
-
-
 def _instructor_only(cell):
     first = _source(cell).lstrip().split("\n", 1)[0].strip()
     tags = cell.get("metadata", {}).get("tags", [])
@@ -144,7 +124,7 @@ def release_notebook(master, exercise, source_name=None):
         cell_id = cell.get("id") or f"cell-{index}"
         if kind == "markdown" and BEGIN in _source(cell):
             _strip_solutions(_source(cell), kind, where)  # the markers' checks
-            for j, (part, text) in enumerate(_answer_parts(_source(cell))):
+            for j, (part, text) in enumerate(solution_parts(_source(cell))):
                 if part == "answer":
                     slots += 1
                     new = nbformat.v4.new_markdown_cell(
