@@ -38,8 +38,8 @@ sys.path.insert(0, str(ROOT / "tests" / "grader"))
 
 import corpus  # noqa: E402
 
-from particles.course import isolation  # noqa: E402
-from particles.course.grading import grade  # noqa: E402
+from particles.course.walls import isolation  # noqa: E402
+from particles.course.grading.driver import grade  # noqa: E402
 
 QUICK = ["euler_as_midpoint", "wrong_shape", "returns_nan", "mutates_input", "calls_sys_exit",
          "calls_the_library_stepper", "hard_codes_public_answers", "wrong_damping_sign", "run_off_by_one"]

@@ -1,11 +1,11 @@
 """Similarity report on a synthetic class: 300 submissions of 02_stiffness (9 asked functions each).
 
-The class is made by ``tests/course/test_similarity.py::write_synthetic``: about a
+The class is made by ``tests/course/similarity/test_compare.py::write_synthetic``: about a
 third of the functions are the master's with renamed variables, half are
 mutated (one to three inserted statements, changed constants), a fifth are
 rewritten from random statements, and ten students copy every function of
 another (renamed, every other one with an extra line). The script times
-``particles.course.similarity.similarity`` (library parsed once, cached, as
+``particles.course.similarity.compare.similarity`` (library parsed once, cached, as
 in one CLI run), splits reading from comparing, counts the work of each
 stage, checks that the planted copies are clustered, and compares with the
 naive baseline: difflib on every pair of distinct structures, estimated from
@@ -28,8 +28,8 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _timing import best_time  # noqa: E402
-from particles.course import similarity as S  # noqa: E402
-from tests.test_similarity import write_synthetic  # noqa: E402
+from particles.course.similarity import compare as S  # noqa: E402
+from tests.course.similarity.test_compare import write_synthetic  # noqa: E402
 
 
 def main():

@@ -34,7 +34,7 @@ def _study(args):
 
 
 def _site(args):
-    from .course.site import build_site
+    from .course.release.site import build_site
 
     try:
         build_site(args.out, args.lectures, timeout=args.timeout)
@@ -51,7 +51,7 @@ def _root(args):
 
 
 def _release(args):
-    from .course.release import release, ReleaseError, write_bundle
+    from .course.release.notebooks import release, ReleaseError, write_bundle
 
     try:
         root = _root(args)
@@ -80,8 +80,8 @@ def _release(args):
 
 
 def _grade(args):
-    from .course.grading import grade, LibraryChanged
-    from .course.isolation import IsolationUnavailable
+    from .course.grading.driver import grade, LibraryChanged
+    from .course.walls.isolation import IsolationUnavailable
     def progress(result):
         print(f"  graded {result.student:<24} {result.exercise:<16} {result.score:>5g} / {result.max_score:<5g}"
               f" ({result.seconds:.1f} s)", flush=True)
@@ -122,7 +122,7 @@ def _grade(args):
 
 
 def _gradescope_bundle(args):
-    from .course.gradescope import write_bundle
+    from .course.results.gradescope import write_bundle
 
     try:
         names = write_bundle(_root(args), args.out, exercise=args.exercise)
@@ -134,7 +134,7 @@ def _gradescope_bundle(args):
 
 
 def _new_exercise(args):
-    from .course.template import new_exercise
+    from .course.release.newexercise import new_exercise
 
     try:
         root = _root(args)
@@ -150,7 +150,7 @@ def _new_exercise(args):
 
 
 def _similarity(args):
-    from .course.similarity import format_table, similarity, write_report
+    from .course.similarity.compare import format_table, similarity, write_report
 
     try:
         report = similarity(args.submissions, threshold=args.threshold, exercise=args.exercise,

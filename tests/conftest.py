@@ -10,7 +10,7 @@
 
 import pytest
 
-pytest_plugins = ["particles.course.plugin"]
+pytest_plugins = ["particles.course.grading.plugin"]
 
 
 @pytest.fixture(scope="session")
@@ -29,7 +29,7 @@ def executed_lecture(tmp_path_factory, request):
 
     import nbformat
 
-    from particles.course.site import execute_notebook
+    from particles.course.release.site import execute_notebook
 
     shared = hasattr(request.config, "workerinput")  # an xdist worker: the base folder is per worker
     base = tmp_path_factory.getbasetemp()

@@ -29,7 +29,7 @@ argument (:class:`~particles.springs.Springs`,
 
 ``PARTICLES_BACKEND=numpy`` also turns ``"auto"`` into NumPy everywhere, and
 so does numba's own ``NUMBA_DISABLE_JIT=1``: the grader's workers run with the
-latter (:mod:`particles.course.process`), so they never import numba or need
+latter (:mod:`particles.course.worker.process`), so they never import numba or need
 its cache. Should numba fail to load, ``"auto"`` falls back to NumPy (once,
 with a warning). The choice is made at each force evaluation, so
 :func:`using` applies to objects built before it too.

@@ -3,7 +3,7 @@
 Which code is checked? By default, **the code you ran in this kernel**: the
 sources of the cells in the order you executed them (IPython's ``In`` list),
 reduced to definitions exactly as the autograder reduces a notebook (see
-:mod:`particles.course.code`). So a function you redefined is checked in its
+:mod:`particles.course.reading.submission`). So a function you redefined is checked in its
 latest version, and you need not save first. The alternative, reading the
 notebook file, needs its path, which a kernel does not reliably know, and
 checks what was last *saved*, not what you see. Pass ``notebook=PATH`` to check
@@ -49,13 +49,13 @@ class CheckResult:
 
     In a notebook (``_repr_html_``) the table is followed, under each test
     that attached some, by figures of your curve beside the reference's
-    (inline PNG images, see :mod:`particles.course.figures`).
+    (inline PNG images, see :mod:`particles.course.grading.figures`).
 
     Attributes
     ----------
     exercise : str
     score, max_score : float
-    tests : list of particles.course.records.TestRecord
+    tests : list of particles.course.results.records.TestRecord
         One record per public test: ``name``, ``points``, ``passed``, ``reason``
         and, when the test drew some, ``figures``.
     notes : list of str
@@ -137,7 +137,7 @@ class CheckResult:
 
     def _repr_html_(self):
         """The table, with the figures of the tests that attached some (inline PNG), for Jupyter."""
-        from . import figures
+        from .grading import figures
 
         e = html.escape
         rows = [f"<p><b>{e(self.exercise)}: {self.score:g} / {self.max_score:g} points on the public tests</b> "
@@ -257,9 +257,9 @@ def check(exercise, notebook=None, *, time_limit=None, root=None):
         When the tests cannot run (pytest missing, no test collected): the
         message says what to do. The check never reports a pass it did not test.
     """
-    from .answers import answers_note
-    from .discovery import written_answers
-    from .grading import Unit, grade_unit
+    from .release.answers import answers_note
+    from .grading.discovery import written_answers
+    from .grading.driver import Unit, grade_unit
 
     root = Path(root) if root else project_root()
     tests = exercise_tests(root)

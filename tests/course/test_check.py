@@ -5,9 +5,9 @@ from pathlib import Path
 import pytest
 
 from particles.course import check as check_module
-from particles.course import grading
+from particles.course.grading import driver as grading
 from particles.course.check import CheckError, CheckResult, check
-from particles.course.records import SubmissionRecord, TestRecord
+from particles.course.results.records import SubmissionRecord, TestRecord
 
 ROOT = Path(__file__).resolve().parents[2]
 

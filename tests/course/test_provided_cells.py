@@ -3,7 +3,7 @@
 A provided cell (no solution block in the master) is recognised in a
 submission by its unchanged source (:meth:`SubmissionCode.from_cells`). The
 worker trusts the code objects compiled from those cells, by identity, before
-anything runs (:func:`particles.course.sandbox._trust_state`); a tripwire passes
+anything runs (:func:`particles.course.walls.audit._trust_state`); a tripwire passes
 a use on to the library only when the nearest frame outside the library is
 such code. The syntax-tree check does not follow a student's call into a
 provided function either, and errors of provided cells that only follow from
@@ -13,9 +13,9 @@ unwritten functions are not the student's.
 import numpy as np
 import pytest
 
-from particles.course.code import SubmissionCode
-from particles.course.release import provided_cells
-from particles.course.runner import GradingFailure, Submission
+from particles.course.reading.submission import SubmissionCode
+from particles.course.release.notebooks import provided_cells
+from particles.course.worker.runner import GradingFailure, Submission
 
 FORBIDDEN = {"particles.integrators.euler": "it is the step you are asked to write"}
 

@@ -1,6 +1,6 @@
 """The student's path, from a venv holding only what a student installs.
 
-A student gets the release bundle (:func:`particles.course.release.write_bundle`)
+A student gets the release bundle (:func:`particles.course.release.notebooks.write_bundle`)
 and installs it with ``pip install -e .``: the base dependencies of
 ``pyproject.toml``, no extras. The venv here is that install, built without
 the network: a ``--without-pip`` venv whose site-packages hard-links the
@@ -31,8 +31,8 @@ import pytest
 from packaging.markers import default_environment
 from packaging.requirements import Requirement
 
-from particles.course.answers import SLOT_KEY, answer_slots
-from particles.course.release import BEGIN, END, _instructor_only, release_notebook, write_bundle
+from particles.course.release.answers import SLOT_KEY, answer_slots
+from particles.course.release.notebooks import BEGIN, END, _instructor_only, release_notebook, write_bundle
 
 ROOT = Path(__file__).resolve().parents[2]
 EXERCISES = sorted(p.stem for p in (ROOT / "solutions").glob("[0-9][0-9]_*.ipynb"))

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from particles.course.plugin import _test_key
+from particles.course.grading.plugin import _test_key
 
 DRAWS = "PARTICLES_RECORD_DRAWS"
 

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 import particles
-from particles.course.expect import expect_array
-from particles.course.registry import remote
-from particles.course.runner import GradingFailure, describe_value
+from particles.course.grading.expect import expect_array
+from particles.course.worker.registry import remote
+from particles.course.worker.runner import GradingFailure, describe_value
 from particles.forces import Damping, Gravity
 from particles.integrators import euler, midpoint
 

@@ -17,9 +17,9 @@ import math
 import numpy as np
 import pytest
 
-from particles.course.expect import LN10, expect_array, expect_float, expect_order
-from particles.course.registry import remote
-from particles.course.runner import GradingFailure, describe_value
+from particles.course.grading.expect import LN10, expect_array, expect_float, expect_order
+from particles.course.worker.registry import remote
+from particles.course.worker.runner import GradingFailure, describe_value
 from particles.integrators import euler, midpoint, rk4, trapezoid
 from particles.problems import get_problem
 from particles.studies.order import fit_order, global_error

@@ -15,8 +15,8 @@ bracket fails all of them.
 import numpy as np
 import pytest
 
-from particles.course.expect import expect_array
-from particles.course.runner import GradingFailure, describe_value
+from particles.course.grading.expect import expect_array
+from particles.course.worker.runner import GradingFailure, describe_value
 from particles.integrators import INTEGRATORS, euler, implicit_euler, symplectic_euler
 from particles.massspring import string
 from particles.studies import stability

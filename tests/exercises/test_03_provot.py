@@ -25,8 +25,8 @@ import numpy as np
 import pytest
 
 from particles.constraints import provot_projection
-from particles.course.expect import expect_array, expect_float
-from particles.course.runner import GradingFailure, describe_value
+from particles.course.grading.expect import expect_array, expect_float
+from particles.course.worker.runner import GradingFailure, describe_value
 from particles.massspring import cloth
 
 EXERCISE = "03_provot"

@@ -18,8 +18,8 @@ reference library (:func:`particles.massspring.cloth_masses`,
 import numpy as np
 import pytest
 
-from particles.course.expect import LN10, expect_array, expect_float
-from particles.course.runner import GradingFailure, describe_value
+from particles.course.grading.expect import LN10, expect_array, expect_float
+from particles.course.worker.runner import GradingFailure, describe_value
 from particles.massspring import cloth, cloth_masses, cloth_springs, cloth_stiffness
 from particles.studies.discretization import static_sag
 from particles.studies.order import fit_order

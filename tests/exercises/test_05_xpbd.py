@@ -28,8 +28,8 @@ taken from the positions, gravity on pinned particles.
 import numpy as np
 import pytest
 
-from particles.course.expect import expect_array, expect_float
-from particles.course.runner import GradingFailure, describe_value
+from particles.course.grading.expect import expect_array, expect_float
+from particles.course.worker.runner import GradingFailure, describe_value
 from particles.forces import Gravity
 from particles.massspring import cloth
 from particles.xpbd import XPBD, Distance, color_constraints, distance_pass

@@ -236,13 +236,21 @@ def test_no_module_is_over_600_lines():
     assert long == {}
 
 
-@pytest.mark.parametrize("package", [p for p in PACKAGES if p != "course"])
+ALL_PACKAGES = sorted(name.removeprefix("particles.") for name, path in MODULES.items()
+                      if path.name == "__init__.py" and name != "particles")
+COURSE_PACKAGES = sorted(p.split(".")[1] for p in ALL_PACKAGES if p.count(".") == 1 and p.startswith("course."))
+
+
+@pytest.mark.parametrize("package", ALL_PACKAGES)
 def test_each_package_docstring_is_its_map(package):
-    """The docstring of each package's __init__ names every module of the package."""
-    init = PACKAGE / package / "__init__.py"
-    doc = ast.get_docstring(ast.parse(init.read_text(encoding="utf-8"))) or ""
-    modules = sorted(p.stem for p in (PACKAGE / package).glob("*.py") if p.name != "__init__.py")
-    missing = [m for m in modules if not re.search(rf"particles\.{package}\.{m}\b|`{m}(\.py)?`|{package}/{m}\.py", doc)]
+    """The docstring of each package's __init__ (course's packages too) names every module and subpackage in it."""
+    folder = PACKAGE.joinpath(*package.split("."))
+    doc = ast.get_docstring(ast.parse((folder / "__init__.py").read_text(encoding="utf-8"))) or ""
+    modules = sorted(p.stem for p in folder.glob("*.py") if p.name != "__init__.py")
+    modules += sorted(p.parent.name for p in folder.glob("*/__init__.py"))
+    path = package.replace(".", "/")
+    missing = [m for m in modules
+               if not re.search(rf"particles\.{re.escape(package)}\.{m}\b|`{m}(\.py)?`|{path}/{m}(\.py|/)", doc)]
     assert missing == []
 
 
@@ -263,6 +271,31 @@ def test_library_tests_mirror_the_packages():
     assert wrong == []
 
 
+# Tests of the course tools at tests/course/ itself: journeys through several packages.
+COURSE_JOURNEYS = {"test_check", "test_cli", "test_provided_cells", "test_student_install"}
+
+
+def test_course_tests_mirror_the_course_packages():
+    """tests/course/<package>/test_<module>.py tests particles/course/<package>/<module>.py; the grader's corpora
+    live in tests/course/grader/, and only journeys through several packages at tests/course/ itself."""
+    tests = ROOT / "tests" / "course"
+    wrong = []
+    for path in sorted(tests.rglob("test_*.py")):
+        parts = path.relative_to(tests).parts
+        if parts[0] == "grader":
+            continue
+        if len(parts) == 1:
+            if path.stem not in COURSE_JOURNEYS and f"particles.course.{path.stem[5:]}" not in MODULES:
+                wrong.append(f"{path.relative_to(ROOT)}: no module particles.course.{path.stem[5:]}")
+            continue
+        module = "particles.course." + ".".join(parts[:-1]) + "." + path.stem[5:]
+        if module not in MODULES:
+            wrong.append(f"{path.relative_to(ROOT)}: no module {module}")
+        elif not (path.parent / "__init__.py").exists():
+            wrong.append(f"{path.relative_to(ROOT)}: no __init__.py beside it")
+    assert wrong == []
+
+
 def _section(path, heading):
     text = (ROOT / path).read_text(encoding="utf-8")
     return re.search(rf"^## {heading}\n(.*?)(?=^## |\Z)", text, flags=re.M | re.S).group(1)
@@ -271,8 +304,11 @@ def _section(path, heading):
 @pytest.mark.parametrize("path, heading", [("README.md", "Layout"), ("CONTRIBUTING.md", "Where to make a change")])
 def test_the_layout_tables_name_every_package(path, heading):
     """README's layout and CONTRIBUTING's table name exactly the packages of particles/."""
-    named = sorted(set(re.findall(r"`particles/(\w+)/", _section(path, heading))))
+    section = _section(path, heading)
+    named = sorted(set(re.findall(r"`particles/(\w+)/", section)))
     assert named == PACKAGES
+    course = sorted(set(re.findall(r"`particles/course/(\w+)/", section)))
+    assert course == COURSE_PACKAGES
 
 
 def _top_names(module):

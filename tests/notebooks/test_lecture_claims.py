@@ -11,7 +11,7 @@ prose and output cannot drift apart again.
 
 The notebooks are executed once per test session by the ``executed_lecture``
 fixture (``tests/conftest.py``), shared with ``tests/notebooks/test_notebooks.py`` and
-``tests/course/test_site.py``.
+``tests/course/release/test_site.py``.
 """
 
 import math

@@ -11,7 +11,7 @@
   the student's work starts, e.g. an import that release dropped) and that
   every cell that fails after it fails because of that missing work or its
   consequences. Structure (stubs, no leaked solution) is checked in
-  ``tests/course/test_release.py``.
+  ``tests/course/release/test_notebooks.py``.
 """
 
 import re
@@ -41,8 +41,8 @@ def _run(path, allow_errors=False):
 
 def _questions(master):
     """The written questions of a master: one answer slot each in the released notebook."""
-    from particles.course.answers import answer_slots
-    from particles.course.release import release_notebook
+    from particles.course.release.answers import answer_slots
+    from particles.course.release.notebooks import release_notebook
 
     return len(answer_slots(release_notebook(nbformat.read(master, as_version=4), master.stem)))
 

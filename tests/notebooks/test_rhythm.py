@@ -5,7 +5,7 @@ For every lecture (``lectures/NN_*.ipynb``) and every master (``solutions/*.ipyn
 * **headers**: each section header opens its own markdown cell, so that the
   comment on a result and the next section are separate cells (the solution
   markers ``### BEGIN SOLUTION`` / ``### END SOLUTION`` of
-  ``particles.course.release`` look like headers but are not);
+  ``particles.course.release.notebooks`` look like headers but are not);
 * **cell length**: a code cell has at most 12 lines;
 * **line length**: a code line has at most 100 characters;
 * **axis cosmetics**: labels, titles, grids and legends live in one small
@@ -25,7 +25,7 @@ import nbformat
 import pytest
 from IPython.core.inputtransformer2 import TransformerManager
 
-from particles.course.release import BEGIN, END
+from particles.course.release.notebooks import BEGIN, END
 
 ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOKS = (sorted((ROOT / "lectures").glob("[0-9][0-9]_*.ipynb"))

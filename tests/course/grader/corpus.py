@@ -418,7 +418,7 @@ def euler_step(f, X, t, h):
 import json, os, re, signal, sys
 
 def euler_step(f, X, t, h):
-    sys.modules["particles.course.sandbox"].Policy.__call__ = lambda self, event, args: None
+    sys.modules["particles.course.walls.audit"].Policy.__call__ = lambda self, event, args: None
     argv = [a.decode() for a in open(f"/proc/{os.getppid()}/cmdline", "rb").read().split(b"\\0")]
     results = argv[argv.index("--grading-results") + 1]
     batch = json.load(open(argv[argv.index("--grading-batch") + 1]))
@@ -440,7 +440,7 @@ import json, pathlib, sys
 import particles
 
 def euler_step(f, X, t, h):
-    sys.modules["particles.course.sandbox"].Policy.__call__ = lambda self, event, args: None
+    sys.modules["particles.course.walls.audit"].Policy.__call__ = lambda self, event, args: None
     master = pathlib.Path(particles.__file__).resolve().parents[1] / "solutions" / "00_warmup.ipynb"
     cells = json.loads(master.read_text())["cells"]
     namespace = {"np": np}
@@ -466,7 +466,7 @@ import importlib, sys
 
 def euler_step(f, X, t, h):
     module = importlib.import_module("particles." + "integrators")
-    wires = sys.modules["particles.course.sandbox"].WIRES
+    wires = sys.modules["particles.course.walls.audit"].WIRES
     real = getattr(module, "eu" + "ler")._original
     return real(f, X, t, h)
 """},

@@ -10,7 +10,7 @@ defines
   would), each losing the points it should with a message that says what is
   wrong; ``culprit`` is the function that holds the mistake, which every
   failing test's message must name (downstream of it too: the grader blames
-  a helper that fails its own tests, see :mod:`particles.course.blame`);
+  a helper that fails its own tests, see :mod:`particles.course.grading.blame`);
 * ``CORRECT`` (optional): case name -> a case that must score full marks;
   ``"optional_fail": {test: piece}`` lists stretch-goal tests it leaves
   failing (a stub left alone), which are labelled and not scored.

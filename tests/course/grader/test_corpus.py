@@ -16,8 +16,8 @@ sys.path.insert(0, str(Path(__file__).parent))
 import corpus  # noqa: E402
 import exercise_corpus  # noqa: E402
 
-from particles.course.grading import grade  # noqa: E402
-from particles.course.reports import score_of  # noqa: E402
+from particles.course.grading.driver import grade  # noqa: E402
+from particles.course.results.reports import score_of  # noqa: E402
 
 SEED = 20240611
 CASES = dict(corpus.REJECTED, **corpus.CORRECT)

@@ -18,7 +18,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent))
 import corpus  # noqa: E402
 
-from particles.course.grading import grade  # noqa: E402
+from particles.course.grading.driver import grade  # noqa: E402
 
 SEED = 20240611
 

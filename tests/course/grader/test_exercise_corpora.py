@@ -15,8 +15,8 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent))
 import exercise_corpus  # noqa: E402
 
-from particles.course.grading import grade  # noqa: E402
-from particles.course.reports import score_of  # noqa: E402
+from particles.course.grading.driver import grade  # noqa: E402
+from particles.course.results.reports import score_of  # noqa: E402
 
 SEED = 20261201
 ONLY = "PARTICLES_CORPORA"

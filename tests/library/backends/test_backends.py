@@ -437,7 +437,7 @@ def test_the_grader_workers_never_compile():
     """The worker's environment turns 'auto' into NumPy (no numba, no cache in the sandbox)."""
     import inspect
 
-    from particles.course import process
+    from particles.course.worker import process
 
     assert '"NUMBA_DISABLE_JIT": "1"' in inspect.getsource(process.Worker)
 

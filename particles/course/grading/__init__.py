@@ -1,0 +1,17 @@
+"""Grading: the driver, the pytest plugin and what the tests use to judge.
+
+Modules:
+
+* :mod:`~particles.course.grading.driver`: ``particles grade``: batches of pytest sessions, records,
+  reports;
+* :mod:`~particles.course.grading.plugin`: the pytest plugin: points, hidden tests, seeds, records
+  of a session;
+* :mod:`~particles.course.grading.discovery`: which notebooks are graded, as which student and
+  exercise; written answers;
+* :mod:`~particles.course.grading.expect`: the checks tests use, each failing with a one-line
+  reason;
+* :mod:`~particles.course.grading.blame`: whose fault a failure is: the judged function or a failing
+  helper of it;
+* :mod:`~particles.course.grading.figures`: figures in the feedback: the student's curve beside the
+  reference's.
+"""

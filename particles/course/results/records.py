@@ -1,0 +1,382 @@
+"""The records of a grading run, defined once: one per test, one per graded notebook.
+
+Three processes hand records on (see :mod:`particles.course.grading.driver`):
+
+1. the pytest session (:mod:`particles.course.grading.plugin`) makes a
+   :class:`TestRecord` per test and a :class:`SessionRecord` per notebook, and
+   writes them as JSON (signed, :mod:`particles.course.results.signing`);
+2. the driver reads them back with :meth:`SessionRecord.from_dict` and
+   completes each into a :class:`SubmissionRecord` (student, notes for the
+   student, the sandbox's layers, the notebook's digest);
+3. the reports (:mod:`particles.course.results.reports`) and the record store
+   (:mod:`particles.course.results.store`) read only these classes.
+
+Every record converts to plain JSON data with ``to_dict()`` and back with
+``from_dict()``, which rejects a missing or mistyped field by name. For
+reading, a record also behaves as a read-only mapping of its fields
+(``record["passed"]`` is ``record.passed``), so that scripts written for the
+JSON files keep working; code in the package uses the attributes.
+:meth:`SubmissionRecord.to_gradescope` and :func:`to_gradescope` make
+Gradescope's ``results.json`` (its specification:
+https://gradescope-autograders.readthedocs.io/en/latest/specs/).
+"""
+
+import dataclasses
+import html
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+__all__ = ["TestRecord", "SessionRecord", "SubmissionRecord", "score_of", "to_gradescope", "VISIBILITIES",
+           "STRETCH_GOAL"]
+
+VISIBILITIES = ("hidden", "after_due_date", "after_published", "visible")
+"""Gradescope's visibility settings of a test."""
+
+STRETCH_GOAL = "stretch goal, not scored"
+"""The label of an optional test (``@pytest.mark.optional``) wherever it is shown."""
+
+
+class _Fields(Mapping):
+    """Read-only mapping access to a dataclass's fields (``record["name"]``, ``dict(record)``)."""
+
+    def __getitem__(self, key):
+        if key not in self._names():
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def __iter__(self):
+        return iter(self._names())
+
+    def __len__(self):
+        return len(self._names())
+
+    @classmethod
+    def _names(cls):
+        return [f.name for f in dataclasses.fields(cls)]
+
+    @classmethod
+    def _take(cls, data, what):
+        """The keyword arguments of `cls` from the dict `data`, with a clear error on what is missing."""
+        if not isinstance(data, Mapping):
+            raise TypeError(f"{what} must be a dict, got {type(data).__name__}")
+        fields = {f.name: f for f in dataclasses.fields(cls)}
+        required = [name for name, f in fields.items() if f.default is dataclasses.MISSING
+                    and f.default_factory is dataclasses.MISSING]
+        missing = [name for name in required if name not in data]
+        if missing:
+            raise ValueError(f"{what} has no {', '.join(map(repr, missing))}")
+        return {name: data[name] for name in fields if name in data}
+
+
+@dataclass(eq=True)
+class TestRecord(_Fields):
+    """The result of one test of one notebook.
+
+    Attributes
+    ----------
+    test : str
+        The test's key: its function name and parameters (``test_order[rk4]``).
+    name : str
+        What it checks, in words (the first line of its docstring).
+    points : float
+    hidden : bool
+        Hidden tests are not shown before grades are published.
+    passed : bool
+    reason : str
+        Why it failed, for the student ("" when it passed).
+    grader_error : bool
+        The failure is the grader's fault, not the submission's.
+    seconds : float
+    seed : int or None
+        The grading seed, when the test drew random parameters.
+    figures : list of dict
+        Curves to draw beside the reference's (:mod:`particles.course.grading.figures`).
+    optional : bool
+        A stretch goal (``@pytest.mark.optional``): shown with :data:`STRETCH_GOAL`, never scored.
+    function : str
+        The student's function the test judges ("" when unknown): the grader's blame of a failure
+        on a helper of it that fails its own tests is worded with it.
+    """
+
+    __test__ = False  # not a pytest test class, whatever its name
+
+    test: str
+    name: str
+    points: float = 1.0
+    hidden: bool = False
+    passed: bool = False
+    reason: str = ""
+    grader_error: bool = False
+    seconds: float = 0.0
+    seed: int | None = None
+    figures: list = field(default_factory=list)
+    optional: bool = False
+    function: str = ""
+
+    @property
+    def score(self):
+        """The points earned: all of them or none (an optional test earns none: it is not scored)."""
+        return self.points if self.passed and not self.optional else 0.0
+
+    @property
+    def max_score(self):
+        """The points the test counts for: its points, 0 for an optional test."""
+        return 0.0 if self.optional else self.points
+
+    @property
+    def label(self):
+        """:data:`STRETCH_GOAL` for an optional test, else ""."""
+        return STRETCH_GOAL if self.optional else ""
+
+    @property
+    def title(self):
+        """The name as shown: with ``(stretch goal, not scored)`` for an optional test."""
+        return f"{self.name} ({self.label})" if self.optional else self.name
+
+    def failed(self, reason):
+        """This test as failed for `reason` (a copy; the record itself is unchanged)."""
+        return dataclasses.replace(self, passed=False, reason=reason, seed=None)
+
+    def to_dict(self):
+        """The record as JSON data (``figures`` only when there are some, ``label`` with ``optional``)."""
+        data = dataclasses.asdict(self)
+        if not self.figures:
+            del data["figures"]
+        if self.optional:
+            data["label"] = self.label
+        return data
+
+    @classmethod
+    def from_dict(cls, data):
+        """The record of JSON data as :meth:`to_dict` writes it."""
+        kwargs = cls._take(data, "a test record")
+        kwargs["points"] = float(kwargs.get("points", 1.0))
+        return cls(**kwargs)
+
+    def output(self):
+        """What the student reads under the test: "passed", or the reason (with the seed of hidden tests)."""
+        text = "passed" if self.passed else self.reason
+        if self.hidden and self.seed is not None:
+            text += f" (random parameters, seed {self.seed})"
+        return text
+
+    def to_gradescope(self, exercise, number, hidden_visibility="after_published"):
+        """This test as one entry of Gradescope's ``tests`` list.
+
+        Parameters
+        ----------
+        exercise : str
+            ``NN_topic``: prefixes the name and tags the entry.
+        number : str
+            Gradescope's test number (``"02.3"``).
+        hidden_visibility : str
+            The visibility of a hidden test, one of :data:`VISIBILITIES`.
+        """
+        output, output_format = self.output(), "text"
+        if self.figures:  # the student's curve beside the reference's, inline
+            from ..grading import figures  # Matplotlib: only when there is something to draw
+
+            output = (f"<p>{html.escape(output)}</p>"
+                      + "".join(figures.figure_html(f, css=False) for f in self.figures))
+            output_format = "html"
+        return {
+            "name": f"{exercise}: {self.title}",
+            "number": number,
+            "score": self.score,
+            "max_score": self.max_score,
+            "status": "passed" if self.passed else "failed",
+            "output": output,
+            "output_format": output_format,
+            "visibility": hidden_visibility if self.hidden else "visible",
+            "tags": [exercise] + (["hidden"] if self.hidden else []) + (["stretch goal"] if self.optional else []),
+            "extra_data": dict({"test": self.test}, **({"optional": True, "label": self.label} if self.optional
+                                                       else {})),
+        }
+
+
+def score_of(tests):
+    """(score, max_score) of a list of test records (records or their JSON data): optional tests count for neither."""
+    tests = [t for t in tests if not t.get("optional", False)]
+    return (sum(t["points"] for t in tests if t["passed"]), sum(t["points"] for t in tests))
+
+
+def _tests(items):
+    return [t if isinstance(t, TestRecord) else TestRecord.from_dict(t) for t in items]
+
+
+class _HoldsTests(_Fields):
+    """A record with a list of :class:`TestRecord` in ``tests``: JSON data and back, the tests typed again."""
+
+    _what = "a record"
+
+    def to_dict(self):
+        """The record as JSON data."""
+        data = dataclasses.asdict(self)
+        data["tests"] = [t.to_dict() for t in self.tests]
+        return data
+
+    @classmethod
+    def from_dict(cls, data):
+        """The record of JSON data as :meth:`to_dict` writes it (a missing field is named)."""
+        kwargs = cls._take(data, cls._what)
+        kwargs["tests"] = _tests(kwargs.get("tests", []))
+        return cls(**kwargs)
+
+
+@dataclass
+class SessionRecord(_HoldsTests):
+    """What one pytest session reports about one notebook it graded (written by the plugin).
+
+    Attributes
+    ----------
+    id : str
+        The notebook's job in the session's batch.
+    seed : int
+        Its grading seed.
+    exercise, submission : str
+    tests : list of TestRecord
+    restarts : int
+        Workers started for it (1 when none was restarted).
+    load_errors : list of dict
+        Errors raised while its definitions were loaded (``label``, ``type``, ``message``, ``where``).
+    skipped : list of dict
+        Statements not run and why (``label``, ``line``, ``text``, ``reason``).
+    syntax_errors : list of [label, message]
+    isolation : dict
+        The worker's walls as it reported them.
+    seconds : float or None
+        Time of the whole notebook; None while it is not finished.
+    """
+
+    _what = "a session record"
+
+    id: str
+    seed: int
+    exercise: str = ""
+    submission: str = ""
+    tests: list = field(default_factory=list)
+    restarts: int = 1
+    load_errors: list = field(default_factory=list)
+    skipped: list = field(default_factory=list)
+    syntax_errors: list = field(default_factory=list)
+    isolation: dict = field(default_factory=dict)
+    seconds: float | None = None
+
+    @property
+    def complete(self):
+        """True when the session finished the notebook (its fixture closed)."""
+        return self.seconds is not None
+
+    def to_dict(self):
+        """The record as JSON data (``seconds`` only once the notebook is complete)."""
+        data = super().to_dict()
+        if self.seconds is None:
+            del data["seconds"]
+        return data
+
+
+@dataclass
+class SubmissionRecord(_HoldsTests):
+    """The grade of one student's notebook of one exercise: what the driver keeps and reports.
+
+    Attributes
+    ----------
+    student, exercise, notebook : str
+    seed : int or None
+        The grading seed of its hidden tests.
+    seconds : float
+    tests : list of TestRecord
+        One per test of the exercise (a test that did not run is recorded as failed, saying why).
+    notes : list of str
+        Lines for the student about loading the notebook (errors, syntax errors, restarts, written answers).
+    written_answers : dict or None
+        ``asked`` and ``answered`` counts of the written questions.
+    grader_status : int or None
+        The pytest session's exit status (0 or 1 when it ended normally).
+    complete : bool
+        The session finished this notebook.
+    isolation : dict
+        The worker's walls (:func:`particles.course.walls.isolation.describe` says them in words: ``sandbox``).
+    sandbox : str
+    notebook_sha256 : str
+        Digest of the graded file (``--resume`` keeps a record only for the same file).
+    resumed : bool
+        The record was kept from an earlier run.
+    """
+
+    _what = "a submission record"
+
+    student: str
+    exercise: str
+    notebook: str = ""
+    seed: int | None = None
+    seconds: float = 0.0
+    tests: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    written_answers: dict | None = None
+    grader_status: int | None = None
+    complete: bool = False
+    isolation: dict = field(default_factory=dict)
+    sandbox: str = ""
+    notebook_sha256: str = ""
+    resumed: bool = False
+
+    @property
+    def score(self):
+        return score_of(self.tests)[0]
+
+    @property
+    def max_score(self):
+        return score_of(self.tests)[1]
+
+    def summary_lines(self):
+        """The lines of Gradescope's top output for this exercise: score, notes, sandbox."""
+        lines = [f"{self.exercise}: {self.score:g} / {self.max_score:g} points"]
+        lines += [f"  {note}" for note in self.notes]
+        if self.sandbox:
+            lines.append(f"  Sandbox of your code: {self.sandbox}")
+        return lines
+
+    def to_gradescope(self, hidden_visibility="after_published"):
+        """This exercise's entries of Gradescope's ``tests`` list (numbered ``NN.k``)."""
+        return [t.to_gradescope(self.exercise, f"{self.exercise[:2]}.{k}", hidden_visibility)
+                for k, t in enumerate(self.tests, start=1)]
+
+
+def to_gradescope(student, results, hidden_visibility="after_published"):
+    """Gradescope's ``results.json`` (a dict) for one student's submission.
+
+    Parameters
+    ----------
+    student : str
+    results : list of SubmissionRecord
+        One per exercise graded.
+    hidden_visibility : str
+        Gradescope visibility of hidden tests (one of :data:`VISIBILITIES`).
+
+    Returns
+    -------
+    dict
+        ``score``, ``max_score``, ``execution_time``, ``output`` (a summary per exercise), ``tests`` and
+        ``extra_data`` (the student, the seeds and the sandbox layers per exercise).
+    """
+    if hidden_visibility not in VISIBILITIES:
+        raise ValueError(f"hidden_visibility must be one of {VISIBILITIES}, got {hidden_visibility!r}")
+    results = [r if isinstance(r, SubmissionRecord) else SubmissionRecord.from_dict(r) for r in results]
+    lines, tests = [], []
+    for result in results:
+        lines += result.summary_lines()
+        tests += result.to_gradescope(hidden_visibility)
+    score, top = score_of(t for r in results for t in r.tests)
+    return {
+        "score": score,
+        "max_score": top,
+        "execution_time": round(sum(r.seconds for r in results), 2),
+        "output": "\n".join(lines),
+        "output_format": "simple_format",
+        "visibility": "visible",
+        "stdout_visibility": "hidden",
+        "extra_data": {"student": student, "seeds": {r.exercise: r.seed for r in results},
+                       "sandbox": {r.exercise: r.isolation for r in results}},
+        "tests": tests,
+    }

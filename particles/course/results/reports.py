@@ -1,0 +1,188 @@
+"""What grading writes: Gradescope ``results.json``, a gradebook CSV, Markdown and HTML feedback.
+
+All are made from the same records (:mod:`particles.course.results.records`): per
+student, one :class:`~particles.course.results.records.SubmissionRecord` per
+exercise, holding one :class:`~particles.course.results.records.TestRecord` per
+test; Gradescope's format itself is written by the records
+(:func:`~particles.course.results.records.to_gradescope`). Figures are drawn here, as inline PNG
+images: in ``feedback.html`` (one self-contained page per student: inline
+CSS and images, no scripts, no network) and in the Gradescope output of
+the tests that have them (``"output_format": "html"``; the others stay
+plain text). Importing this module loads Matplotlib's Agg canvas, so that
+the grading driver has all its code loaded before its first worker starts.
+"""
+
+import csv
+import html
+import json
+
+from ..grading import figures
+from .records import VISIBILITIES, SubmissionRecord, score_of, to_gradescope
+
+__all__ = ["score_of", "gradescope_results", "to_gradescope", "feedback_markdown", "feedback_html",
+           "write_gradebook", "VISIBILITIES"]
+
+figures.load()
+
+
+def _fmt(x):
+    return f"{x:g}"
+
+
+def _records(results):
+    """`results` as :class:`SubmissionRecord` objects (dicts of JSON data are read as records)."""
+    return [r if isinstance(r, SubmissionRecord) else SubmissionRecord.from_dict(r) for r in results]
+
+
+gradescope_results = to_gradescope  # the name this module gave it first
+
+
+def _cell(text):
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def feedback_markdown(student, results):
+    """Per-student feedback in Markdown: scores, a table of tests, reasons, how to reproduce."""
+    results = _records(results)
+    score, top = score_of(t for r in results for t in r.tests)
+    out = [f"# Feedback for {student}", "", f"**Total: {_fmt(score)} / {_fmt(top)} points**", ""]
+    if any(t.figures for r in results for t in r.tests):
+        out += ["Figures of your curves beside the reference's are in `feedback.html`, beside this file.", ""]
+    for result in results:
+        out += [f"## {result.exercise}: {_fmt(result.score)} / {_fmt(result.max_score)}", ""]
+        if result.notebook:
+            out += [f"Graded notebook: `{result.notebook}`", ""]
+        out += ["| | test | points | what happened |", "| --- | --- | ---: | --- |"]
+        for test in result.tests:
+            mark = "✅" if test.passed else "❌"
+            name = test.title + (" *(hidden)*" if test.hidden else "")
+            out.append(f"| {mark} | {_cell(name)} | {_fmt(test.score)} / {_fmt(test.max_score)} | "
+                       f"{_cell('' if test.passed else test.reason)} |")
+        out.append("")
+        out += [f"- {note}" for note in result.notes]
+        if result.seed is not None and any(t.hidden for t in result.tests):
+            out.append(f"- Hidden tests drew their random parameters with seed {result.seed}.")
+        out.append("")
+    return "\n".join(out).rstrip("\n") + "\n"
+
+
+_CSS = """
+body { font: 15px/1.45 system-ui, -apple-system, "Segoe UI", Roboto, sans-serif; color: #1d1d1f;
+       background: #fafafa; margin: 0; }
+main { max-width: 60rem; margin: 0 auto; padding: 1.5rem 1.25rem 3rem; }
+h1 { font-size: 1.6rem; margin: 0 0 .25rem; }
+h2 { font-size: 1.2rem; margin: 2rem 0 .5rem; padding-bottom: .25rem; border-bottom: 1px solid #ddd; }
+.total { font-size: 1.1rem; font-weight: 600; }
+.meta, .notes { color: #555; font-size: .9rem; }
+table { border-collapse: collapse; width: 100%; background: #fff; table-layout: fixed; }
+col.mark { width: 2rem; } col.test { width: 42%; } col.points { width: 5.5rem; }
+td { overflow-wrap: anywhere; }
+th, td { text-align: left; vertical-align: top; padding: .4rem .55rem; border-bottom: 1px solid #e5e5e5; }
+th { font-size: .85rem; color: #555; font-weight: 600; }
+td.points { white-space: nowrap; text-align: right; }
+td.mark { width: 1.5rem; font-weight: 700; }
+tr.passed td.mark { color: #1a7f37; }
+tr.failed td.mark { color: #c62828; }
+tr.failed td.reason { color: #8a1c1c; }
+.hidden-tag { font-size: .75rem; color: #666; border: 1px solid #bbb; border-radius: .6rem; padding: 0 .4rem; }
+tr.figures td { border-bottom: 1px solid #e5e5e5; padding-top: 0; }
+details summary { cursor: pointer; color: #0b57d0; font-size: .9rem; margin: .2rem 0 .4rem; }
+.figure-list { display: flex; flex-wrap: wrap; gap: .75rem; }
+figure.feedback-figure { margin: 0; background: #fff; border: 1px solid #e0e0e0; padding: .35rem; max-width: 100%; }
+figure.feedback-figure img { display: block; max-width: 100%; height: auto; }
+figcaption { font-size: .8rem; color: #555; max-width: 26rem; margin-top: .25rem; }
+code { font-size: .85em; background: #eee; padding: 0 .2rem; border-radius: .2rem; }
+"""
+
+
+def _figures_row(test):
+    if not test.figures:
+        return ""
+    count = f"{len(test.figures)} figure{'s' if len(test.figures) > 1 else ''}"
+    inner = "".join(figures.figure_html(f) for f in test.figures)
+    return (f'<tr class="figures"><td></td><td colspan="3"><details{"" if test.passed else " open"}>'
+            f"<summary>Your curve beside the reference ({count})</summary>"
+            f'<div class="figure-list">{inner}</div></details></td></tr>')
+
+
+def feedback_html(student, results):
+    """Per-student feedback as one self-contained HTML page: scores, tests, reasons, figures.
+
+    Parameters
+    ----------
+    student : str
+    results : list of SubmissionRecord
+        One per exercise graded.
+
+    Returns
+    -------
+    str
+        The page: inline CSS, figures as inline PNG images (open under the
+        failed tests, folded under the passed ones), no scripts and no
+        external resources (its Content-Security-Policy forbids them).
+    """
+    e = html.escape
+    results = _records(results)
+    score, top = score_of(t for r in results for t in r.tests)
+    out = ['<!DOCTYPE html>', '<html lang="en">', "<head>", '<meta charset="utf-8">',
+           '<meta http-equiv="Content-Security-Policy" content="default-src \'none\'; img-src data:; '
+           'style-src \'unsafe-inline\'">',
+           '<meta name="viewport" content="width=device-width, initial-scale=1">',
+           f"<title>Feedback for {e(student)}</title>", f"<style>{_CSS}</style>", "</head>", "<body><main>",
+           f"<h1>Feedback for {e(student)}</h1>", f'<p class="total">Total: {_fmt(score)} / {_fmt(top)} points</p>']
+    for result in results:
+        out.append(f'<section class="exercise"><h2>{e(result.exercise)}: {_fmt(result.score)} / '
+                   f'{_fmt(result.max_score)}</h2>')
+        if result.notebook:
+            out.append(f'<p class="meta">Graded notebook: <code>{e(str(result.notebook))}</code></p>')
+        out.append('<table><colgroup><col class="mark"><col class="test"><col class="points"><col></colgroup>'
+                   "<thead><tr><th></th><th>test</th><th>points</th><th>what happened</th></tr></thead><tbody>")
+        for test in result.tests:
+            status = "passed" if test.passed else "failed"
+            hidden = ' <span class="hidden-tag">hidden</span>' if test.hidden else ""
+            out.append(f'<tr class="{status}"><td class="mark">{"✓" if test.passed else "✗"}</td>'
+                       f"<td>{e(test.title)}{hidden}</td>"
+                       f'<td class="points">{_fmt(test.score)} / {_fmt(test.max_score)}</td>'
+                       f'<td class="reason">{"" if test.passed else e(test.reason)}</td></tr>')
+            out.append(_figures_row(test))
+        out.append("</tbody></table>")
+        notes = [e(n) for n in result.notes]
+        if result.seed is not None and any(t.hidden for t in result.tests):
+            notes.append(f"Hidden tests drew their random parameters with seed {e(str(result.seed))}.")
+        if notes:
+            out.append('<ul class="notes">' + "".join(f"<li>{n}</li>" for n in notes) + "</ul>")
+        out.append("</section>")
+    out += ["</main></body>", "</html>"]
+    return "\n".join(line for line in out if line) + "\n"
+
+
+def write_gradebook(path, rows, exercises):
+    """Write the gradebook CSV: one row per student, one column per exercise, total, max_total.
+
+    Parameters
+    ----------
+    rows : dict
+        student -> list of :class:`~particles.course.results.records.SubmissionRecord`, one per exercise.
+    exercises : list of str
+        Column order. An exercise a student did not submit is left empty.
+    """
+    rows = {student: _records(results) for student, results in rows.items()}
+    maxima = {}
+    for results in rows.values():
+        for r in results:
+            maxima[r.exercise] = max(maxima.get(r.exercise, 0), r.max_score)
+    with open(path, "w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(["student", *exercises, "total", "max_total"])
+        for student in sorted(rows):
+            by_exercise = {r.exercise: r.score for r in rows[student]}
+            total = sum(by_exercise.values())
+            writer.writerow([student, *[_fmt(by_exercise[e]) if e in by_exercise else "" for e in exercises],
+                             _fmt(total), _fmt(sum(maxima.get(e, 0) for e in exercises))])
+
+
+def write_json(path, data):
+    """Write `data` as indented JSON with a final newline."""
+    with open(path, "w") as handle:
+        json.dump(data, handle, indent=2)
+        handle.write("\n")

@@ -1,0 +1,79 @@
+"""The records of a grading run, on disk as they are made: what ``particles grade --resume`` reads back.
+
+One JSON file per notebook graded, ``DIR/records/<student>__<exercise>.json``,
+written (atomically: a temporary file, then a rename) as soon as the notebook's
+batch is done. A run that is stopped anyway (Ctrl-C, power loss, a killed
+driver) keeps every finished record; a resumed run keeps a record only when it
+is complete, of the same notebook (same bytes: SHA-256) and made with the same
+options (public only, seed, limits), and grades everything else again.
+"""
+
+import json
+import os
+import tempfile
+from pathlib import Path
+
+from ..grading.discovery import notebook_digest
+from .records import SubmissionRecord
+
+__all__ = ["RecordStore"]
+
+
+class RecordStore:
+    """The ``records/`` folder of a grading run.
+
+    Parameters
+    ----------
+    folder : path
+        Where the records live (made when missing).
+    options : dict
+        The options of the run (JSON-able); a record made with other options
+        is not kept by :meth:`load`.
+    """
+
+    def __init__(self, folder, options):
+        self.folder = Path(folder)
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.options = json.loads(json.dumps(options))
+
+    def path(self, student, exercise):
+        """The record file of one student's notebook of one exercise."""
+        return self.folder / f"{student}__{exercise}.json"
+
+    def save(self, result):
+        """Write one notebook's :class:`~particles.course.results.records.SubmissionRecord` (atomically: a new file, renamed)."""
+        target = self.path(result.student, result.exercise)
+        data = dict(result.to_dict(), options=self.options)
+        # not "*.json" until renamed: a driver killed while writing leaves no file that reads as a record
+        handle, name = tempfile.mkstemp(dir=self.folder, prefix=".record-", suffix=".part")
+        try:
+            with os.fdopen(handle, "w") as stream:
+                json.dump(data, stream, indent=1)
+                stream.flush()
+                os.fsync(stream.fileno())
+            os.replace(name, target)
+        except BaseException:
+            Path(name).unlink(missing_ok=True)
+            raise
+
+    def load(self, unit):
+        """The kept record of `unit` (a :class:`~particles.course.grading.discovery.Unit`), or None to grade it again."""
+        try:
+            data = json.loads(self.path(unit.student, unit.exercise).read_text())
+        except (OSError, ValueError):
+            return None
+        if not isinstance(data, dict):
+            return None
+        same = (data.get("student") == unit.student and data.get("exercise") == unit.exercise
+                and data.get("options") == self.options and data.get("complete") is True
+                and data.get("grader_status") in (0, 1)
+                and data.get("notebook_sha256") == notebook_digest(unit.notebook) != "")
+        if not same:
+            return None
+        data.pop("options", None)
+        try:
+            record = SubmissionRecord.from_dict(data)
+        except (TypeError, ValueError):
+            return None
+        record.notebook, record.resumed = str(unit.notebook), True
+        return record

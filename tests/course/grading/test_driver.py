@@ -1,0 +1,144 @@
+"""The grading driver keeps its records: written as they are made, resumed, the same alone and in a batch."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent.parent / "grader"))
+import corpus  # noqa: E402
+
+from particles.course.walls import isolation  # noqa: E402
+from particles.course.grading.discovery import Unit  # noqa: E402
+from particles.course.grading.driver import LibraryChanged, grade, grade_batch  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[3]
+
+HOSTILE = '''
+import os, signal, glob
+
+def euler_step(f, X, t, h):
+    """A correct step that first tries every way out it knows (each refused), then answers."""
+    for attempt in (lambda: os.kill(-1, signal.SIGKILL), lambda: os.kill(os.getppid(), signal.SIGKILL),
+                    lambda: [open(p).read() for p in glob.glob("/tmp/particles-grade-*/grader/*.json")],
+                    lambda: open(os.path.expanduser("~/../records.json"), "w").write("{}")):
+        try:
+            attempt()
+        except BaseException:
+            pass
+    return X + h * f(X, t)
+'''
+
+KILLER = '''
+import os
+
+def total_force(x, v, m, g, d):
+    """Ends its own worker."""
+    os._exit(3)
+'''
+
+
+def _write(folder, name, notebook):
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / f"{name}_00_warmup.ipynb").write_text(json.dumps(notebook) if isinstance(notebook, dict) else notebook)
+
+
+def test_honest_grade_is_the_same_alone_and_beside_hostile_ones(tmp_path):
+    """The master's verdicts in one batch with two hostile notebooks equal its verdicts alone."""
+    subs = tmp_path / "subs"
+    _write(subs, "honest", corpus.MASTER.read_text())
+    _write(subs, "hostile", corpus.build({"replace": {"euler_step": HOSTILE}}))
+    _write(subs, "killer", corpus.build({"replace": {"total_force": KILLER}}))
+    units = [Unit(name, "00_warmup", subs / f"{name}_00_warmup.ipynb") for name in ("hostile", "honest", "killer")]
+    together = grade_batch(units, ROOT, seeds=[7, 7, 7], time_limit=5.0)
+    alone = grade_batch([units[1]], ROOT, seeds=[7], time_limit=5.0)[0]
+    verdicts = {t["test"]: (t["passed"], t["reason"]) for t in alone["tests"]}
+    assert all(passed for passed, _ in verdicts.values()), verdicts
+    assert {t["test"]: (t["passed"], t["reason"]) for t in together[1]["tests"]} == verdicts
+    assert all(r["complete"] for r in together)
+    hostile = {t["test"]: t for t in together[0]["tests"]}
+    assert hostile["test_euler_step_circle"]["passed"]  # its attempts all failed, and it answered
+    killer = {t["test"]: t for t in together[2]["tests"]}
+    assert not killer["test_total_force_three_particles"]["passed"]
+    assert "exit status 3" in killer["test_total_force_three_particles"]["reason"]
+    assert together[1]["isolation"]["audit_hook"] is True and together[1]["sandbox"]
+
+
+def test_records_are_written_as_they_are_made_and_resumed(tmp_path):
+    """Each notebook's record is on disk after its batch; --resume keeps unchanged ones and grades the rest."""
+    subs, out = tmp_path / "subs", tmp_path / "out"
+    for k in range(3):
+        _write(subs, f"s{k}", corpus.MASTER.read_text())
+    first = grade([subs], out, seed=11, root=ROOT)
+    records = sorted(p.name for p in (out / "records").glob("*.json"))
+    assert records == [f"s{k}_00_warmup__00_warmup.json" for k in range(3)]
+    assert first["resumed"] == 0
+    # one notebook changes, one record is lost (a run stopped before it): both are graded again
+    _write(subs, "s1", corpus.STUB.read_text())
+    (out / "records" / "s2_00_warmup__00_warmup.json").unlink()
+    again = grade([subs], out, seed=11, root=ROOT, resume=True)
+    assert again["resumed"] == 1
+    scores = {s: sum(t["points"] for t in r[0]["tests"] if t["passed"]) for s, r in again["students"].items()}
+    assert scores == {"s0_00_warmup": 11, "s1_00_warmup": 0, "s2_00_warmup": 11}
+    assert (out / "gradebook.csv").read_text().count("\n") == 4
+    # other options: nothing is kept
+    assert grade([subs], out, seed=12, root=ROOT, resume=True)["resumed"] == 0
+    with pytest.raises(ValueError, match="resume needs out"):
+        grade([subs], None, resume=True, root=ROOT)
+
+
+def test_a_killed_driver_keeps_its_records(tmp_path):
+    """A `particles grade` killed mid-run leaves the finished records; --resume grades only the rest."""
+    subs, out = tmp_path / "subs", tmp_path / "out"
+    for k in range(6):
+        _write(subs, f"s{k}", corpus.MASTER.read_text())
+    command = [sys.executable, "-m", "particles", "grade", str(subs), "--out", str(out), "--seed", "5",
+               "--root", str(ROOT)]
+    driver = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                              start_new_session=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and len(list((out / "records").glob("*.json"))) < 2:
+        time.sleep(0.05)
+    os.killpg(driver.pid, signal.SIGKILL)
+    driver.wait()
+    kept = len(list((out / "records").glob("*.json")))
+    assert 2 <= kept
+    done = subprocess.run(command + ["--resume"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert f"resumed: {kept} record(s)" in done.stdout or kept == 6
+    assert len(list((out / "records").glob("*.json"))) == 6
+    assert "sandbox: " in done.stdout
+
+
+def test_a_record_cut_off_before_its_rename_is_no_record(tmp_path, monkeypatch):
+    """Killed between writing and renaming: the folder holds no ``*.json`` but the finished ones, nothing to load."""
+    from particles.course.results.records import SubmissionRecord
+    from particles.course.results.store import RecordStore
+
+    subs, out = tmp_path / "subs", tmp_path / "out"
+    _write(subs, "s0", corpus.MASTER.read_text())
+    grade([subs], out, seed=3, root=ROOT)
+    store = RecordStore(out / "records", {"other": "options"})
+    (record,) = [json.loads(p.read_text()) for p in (out / "records").glob("*.json")]
+    monkeypatch.setattr(os, "replace", lambda *args: None)  # the rename never happens
+    store.path("s0_00_warmup", "00_warmup").unlink()
+    record.pop("options")
+    store.save(SubmissionRecord.from_dict(record))
+    assert list((out / "records").glob("*.json")) == []
+    assert len(list((out / "records").glob(".record-*"))) == 1
+
+
+def test_a_changed_library_fails_the_run_loudly(tmp_path, monkeypatch):
+    """When the library differs at the end of a run, grade raises LibraryChanged and marks the outputs."""
+    subs, out = tmp_path / "subs", tmp_path / "out"
+    _write(subs, "s0", corpus.MASTER.read_text())
+    monkeypatch.setattr(isolation, "library_changes", lambda before, package=None: ["course/grading/expect.py"])
+    with pytest.raises(LibraryChanged, match="expect.py") as caught:
+        grade([subs], out, seed=1, root=ROOT)
+    assert "s0_00_warmup" in caught.value.summary["students"]
+    assert "Do not trust" in (out / "LIBRARY-CHANGED.txt").read_text()

@@ -1,0 +1,101 @@
+"""The Gradescope bundle: unpacked into a fake /autograder tree, run_autograder writes results.json."""
+
+import json
+import os
+import shutil
+import stat
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from particles.course.walls import isolation
+
+from particles.cli import main
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+@pytest.fixture(scope="module")
+def bundle(tmp_path_factory):
+    out = tmp_path_factory.mktemp("bundle") / "autograder.zip"
+    assert main(["gradescope-bundle", "--out", str(out), "--root", str(ROOT), "--exercise", "00_warmup"]) == 0
+    return out
+
+
+def _autograder_tree(bundle, root, notebook_text):
+    """A fake /autograder: source/ from the zip, submission/ with one notebook, results/."""
+    with zipfile.ZipFile(bundle) as archive:
+        archive.extractall(root / "source")
+        for info in archive.infolist():  # zipfile does not restore permissions; Gradescope's unzip does
+            if (info.external_attr >> 16) & stat.S_IXUSR:
+                os.chmod(root / "source" / info.filename, 0o755)
+    (root / "submission").mkdir()
+    (root / "submission" / "my_warmup.ipynb").write_text(notebook_text)
+    return root
+
+
+def _run_autograder(root):
+    env = dict(os.environ, AUTOGRADER_ROOT=str(root), PARTICLES_PYTHON=sys.executable)
+    env.pop("PYTHONPATH", None)
+    done = subprocess.run([str(root / "source" / "run_autograder")], env=env, capture_output=True, text=True,
+                          timeout=600)
+    assert done.returncode == 0, done.stderr
+    return json.loads((root / "results" / "results.json").read_text())
+
+
+def test_bundle_contents(bundle):
+    """The zip holds the two scripts (executable), the library and all exercise tests; no masters, no corpus."""
+    with zipfile.ZipFile(bundle) as archive:
+        names = archive.namelist()
+        modes = {i.filename: (i.external_attr >> 16) & 0o777 for i in archive.infolist()}
+    assert names[:2] == ["setup.sh", "run_autograder"] and modes["run_autograder"] == 0o755
+    assert "tests/exercises/test_00_warmup.py" in names and "particles/course/worker/main.py" in names
+    assert not [n for n in names if n.startswith(("solutions", "tests/grader", "exercises"))]
+    setup = zipfile.ZipFile(bundle).read("setup.sh").decode()
+    assert "pip install" in setup
+    assert subprocess.run(["bash", "-n", "-c", setup]).returncode == 0
+
+
+def test_run_autograder_grades_the_master(bundle, tmp_path):
+    """run_autograder against a fake /autograder grades a correct notebook to full marks, hidden tests included."""
+    root = _autograder_tree(bundle, tmp_path / "autograder", (ROOT / "solutions" / "00_warmup.ipynb").read_text())
+    results = _run_autograder(root)
+    assert results["score"] == results["max_score"] == 11
+    assert len(results["tests"]) == 8 and {t["status"] for t in results["tests"]} == {"passed"}
+    assert {"name", "score", "max_score", "status", "output", "visibility"} <= set(results["tests"][0])
+    assert results["execution_time"] > 0 and "00_warmup: 11 / 11" in results["output"]
+    # the same sandbox as `particles grade`, and the output says which layers were active
+    expected = "namespaces (bubblewrap)" if isolation.probe()["namespaces"] else "no namespaces"
+    assert f"Sandbox of your code: {expected}" in results["output"]
+    assert results["extra_data"]["sandbox"]["00_warmup"]["audit_hook"] is True
+
+
+def test_run_autograder_survives_a_broken_submission(bundle, tmp_path):
+    """A submission that is not a notebook still yields a results.json with score 0 and reasons."""
+    root = _autograder_tree(bundle, tmp_path / "autograder", "this is not JSON")
+    results = _run_autograder(root)
+    assert results["score"] == 0 and results["max_score"] == 11
+    assert all("could not be read" in t["output"] for t in results["tests"])
+
+
+def test_run_autograder_writes_a_result_even_when_grading_cannot_start(bundle, tmp_path):
+    """If the grader cannot even start, run_autograder still leaves a results.json that says so."""
+    root = _autograder_tree(bundle, tmp_path / "autograder", "{}")
+    shutil.rmtree(root / "source" / "particles")
+    env = dict(os.environ, AUTOGRADER_ROOT=str(root), PARTICLES_PYTHON="/nonexistent/python")
+    subprocess.run([str(root / "source" / "run_autograder")], env=env, capture_output=True, timeout=60)
+    results = json.loads((root / "results" / "results.json").read_text())
+    assert results["score"] == 0 and "could not grade" in results["output"]
+
+
+def test_run_autograder_with_no_notebook(bundle, tmp_path):
+    """An empty submission scores 0 of 11 with a reason on every test."""
+    root = _autograder_tree(bundle, tmp_path / "autograder", "{}")
+    (root / "submission" / "my_warmup.ipynb").unlink()
+    (root / "submission" / "notes.txt").write_text("I forgot the notebook")
+    results = _run_autograder(root)
+    assert results["score"] == 0 and results["max_score"] == 11
+    assert all("no notebook" in t["output"] for t in results["tests"])
