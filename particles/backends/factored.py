@@ -23,11 +23,11 @@ __all__ = ["FactoredKernels"]
 
 
 def _strict(A, lower):
-    """The strictly lower (or upper) part of `A` in CSR (int32 indices: less memory to stream), and its diagonal."""
+    """The strictly lower (or upper) part of `A` in CSR (int64 indices: faster here than int32), and its diagonal."""
     A = scipy.sparse.csr_matrix(A)
     part = scipy.sparse.csr_matrix(scipy.sparse.tril(A, -1) if lower else scipy.sparse.triu(A, 1))
     part.sort_indices()
-    return (part.indptr.astype(np.int64), part.indices.astype(np.int32), np.ascontiguousarray(part.data),
+    return (part.indptr.astype(np.int64), part.indices.astype(np.int64), np.ascontiguousarray(part.data),
             np.ascontiguousarray(A.diagonal()))
 
 
@@ -69,7 +69,7 @@ class FactoredKernels:
         self.perm_r = lu.perm_r.astype(np.int64)
         self.perm_c = lu.perm_c.astype(np.int64)
         Q = scipy.sparse.csr_matrix(Q)
-        self.Qp, self.Qj, self.Qx = Q.indptr.astype(np.int64), Q.indices.astype(np.int32), Q.data.astype(float)
+        self.Qp, self.Qj, self.Qx = Q.indptr.astype(np.int64), Q.indices.astype(np.int64), Q.data.astype(float)
         self.i, self.j = i.astype(np.int64), j.astype(np.int64)
         self.k, self.L0 = np.ascontiguousarray(k, dtype=float), np.ascontiguousarray(L0, dtype=float)
         self.free = free.astype(np.int64)

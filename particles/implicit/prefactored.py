@@ -95,7 +95,10 @@ class Prefactored(SpringSolver):
     Cost: one factorization of ``M + h^2 L`` per `h`; per iteration one
     local step over the springs, two triangular solves per coordinate, a
     sparse product for the residual and the small least-squares problem of
-    Anderson's mixing.
+    Anderson's mixing. Compiled (`backend`), the local step also gives the
+    residual (``g = M (x - y) / h^2 - F_springs(x)``, no product with the
+    matrix) and the triangular solves run over SuperLU's factors, kept as
+    plain arrays, all three coordinates in one pass.
 
     Why a residual and acceleration: the plain iteration converges
     linearly, at a rate set by how far ``M + h^2 L`` (every spring as stiff
