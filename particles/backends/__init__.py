@@ -12,8 +12,8 @@ pairs), that is worth a factor of several (``bench/bench_backends.py``).
 argument (:class:`~particles.springs.Springs`,
 :class:`~particles.springs.Bending`,
 :class:`~particles.forces.lennardjones.LennardJones`,
-:class:`~particles.forces.nbody.NBodyGravity`, :class:`~particles.xpbd.XPBD` and
-:func:`~particles.xpbd.distance_pass`):
+:class:`~particles.forces.nbody.NBodyGravity`, :class:`~particles.xpbd.XPBD`,
+:func:`~particles.xpbd.distance_pass` and :class:`~particles.implicit.Prefactored`):
 
 * ``"numpy"``: the reference code, always;
 * ``"numba"``: the compiled kernels (an error, naming the extra to install,
@@ -103,8 +103,10 @@ Modules
 * :mod:`particles.backends.compiled`: the numba drivers, one per compiled force, and the compiled step;
 * :mod:`particles.backends.xpbdstep`: the compiled XPBD substep;
 * :mod:`particles.backends.fixes`: Provot's pass and the collider as compiled fixes of a step's end state;
+* :mod:`particles.backends.factored`: the prefactorized implicit solver's local step, triangular solves
+  over its kept factorization and residual (:class:`~particles.implicit.Prefactored` with ``backend=``);
 * ``_kernels.py``, ``_step_kernels.py``, ``_pbd_kernels.py``, ``_provot_kernels.py``,
-  ``_collider_kernels.py``: the numba loops they call (private to the package).
+  ``_collider_kernels.py``, ``_factored_kernels.py``: the numba loops they call (private to the package).
 
 Examples
 --------

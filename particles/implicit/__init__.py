@@ -27,7 +27,10 @@ runs them in the library's loop (see :mod:`particles.integrators.solvers`):
   (global step: a linear system whose matrix ``M + h^2 L`` never changes)
   minimizes the implicit-Euler objective. The matrix is factorized once;
   each iteration costs a few back-substitutions, and a step iterates (with
-  Anderson acceleration) until the objective's gradient is small.
+  Anderson acceleration) until the objective's gradient is small. With
+  ``backend="numba"`` (or ``"auto"`` on large systems) the local step, the
+  back-substitutions and the residual run compiled
+  (:mod:`particles.backends.factored`).
 
 Both are first order and dissipate energy (numerical damping grows with
 ``h``), and both are stable at time steps far above the explicit limit.

@@ -15,6 +15,7 @@ import numpy as np
 import scipy.sparse
 
 from .._checks import count, positive_number
+from ..backends import check_backend, kernels_for
 from ..errors import ConvergenceError
 from ..forces.pairs import pair_differences
 from .sparse import SpringSolver, factorize, free_dofs
@@ -22,13 +23,13 @@ from .sparse import SpringSolver, factorize, free_dofs
 __all__ = ["Prefactored"]
 
 
-def _least_squares(A, b):
-    """argmin |A c - b| for a tall A of a few columns, by its normal equations (Anderson's small problem)."""
-    AtA = A.T @ A
+def _least_squares(R, b):
+    """argmin |R^T c - b| for a few rows R (m, N), by its normal equations (Anderson's small problem)."""
+    RRt = R @ R.T
     try:
-        return np.linalg.solve(AtA + 1e-14 * np.trace(AtA) * np.eye(len(AtA)), A.T @ b)
-    except np.linalg.LinAlgError:  # exactly dependent columns
-        return np.linalg.lstsq(A, b, rcond=None)[0]
+        return np.linalg.solve(RRt + 1e-14 * np.trace(RRt) * np.eye(len(RRt)), R @ b)
+    except np.linalg.LinAlgError:  # exactly dependent rows
+        return np.linalg.lstsq(R.T, b, rcond=None)[0]
 
 
 class Prefactored(SpringSolver):
@@ -57,6 +58,12 @@ class Prefactored(SpringSolver):
         A fixed number of plain local/global iterations per step, without
         the residual check (Liu et al.'s "about 10"); overrides `tol`,
         `max_iterations` and `anderson`.
+    backend : {None, "auto", "numpy", "numba"}, optional
+        The iteration's local step, global solves and residual in this NumPy
+        code or compiled (:mod:`particles.backends.factored`; None: the
+        global choice, see :mod:`particles.backends`). The compiled solves
+        run over the same factorization; they agree with NumPy's to
+        rounding, and a run to the solver's tolerance.
 
     Attributes
     ----------
@@ -88,7 +95,10 @@ class Prefactored(SpringSolver):
     Cost: one factorization of ``M + h^2 L`` per `h`; per iteration one
     local step over the springs, two triangular solves per coordinate, a
     sparse product for the residual and the small least-squares problem of
-    Anderson's mixing.
+    Anderson's mixing. Compiled (`backend`), the local step also gives the
+    residual (``g = M (x - y) / h^2 - F_springs(x)``, no product with the
+    matrix) and the triangular solves run over SuperLU's factors, kept as
+    plain arrays, all three coordinates in one pass.
 
     Why a residual and acceleration: the plain iteration converges
     linearly, at a rate set by how far ``M + h^2 L`` (every spring as stiff
@@ -106,8 +116,10 @@ class Prefactored(SpringSolver):
     a folded cloth, whose compressed springs make ``Phi`` non-convex.
     """
 
-    def __init__(self, system, h, tol=0.1, max_iterations=1000, anderson=8, iterations=None):
+    def __init__(self, system, h, tol=0.1, max_iterations=1000, anderson=8, iterations=None, backend=None):
         super().__init__(system)
+        self._backend = check_backend(backend)
+        self._fast = None  # the compiled kernels of this factorization, when the step runs compiled
         if iterations is not None and (isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer))
                                        or iterations < 1):
             raise ValueError(f"iterations must be a positive integer or None, got {iterations!r}")
@@ -134,6 +146,7 @@ class Prefactored(SpringSolver):
         self._Q_ff = Q[free][:, free].tocsr()
         # a minimum-degree ordering of the symmetric matrix keeps the LU factors sparse
         self._lu = factorize(Q[free][:, free])
+        self._kernels = None  # built from the factorization at the first compiled step
         self.h = h
 
     def step(self, X, t, h):
@@ -170,6 +183,7 @@ class Prefactored(SpringSolver):
         if not np.isclose(h, self.h, rtol=1e-12, atol=0.0):
             self._factor(h)
         system, free = self.system, self._free
+        self._fast = self._compiled() if kernels_for(self._backend, system.n) is not None else None
         x, v, m = X[:, 0], X[:, 1], system.m
         F = np.zeros_like(x)
         for force in system.other_forces():  # a loop over the few non-spring forces
@@ -184,6 +198,8 @@ class Prefactored(SpringSolver):
                     * float(np.max(np.abs(x), initial=0.0)) * np.sqrt(x[free].size) / self.tol)
         xt = yt.copy()
         xt[:, system.pinned] = x[system.pinned].T
+        if self._fast is not None:
+            self._fast.begin(yt[:, free], h * h)
         if self.iterations is not None:
             for _ in range(self.iterations):  # a loop over local/global iterations
                 xt[:, free] = self._global(b, self._local(xt)[0], h)
@@ -195,8 +211,18 @@ class Prefactored(SpringSolver):
         X_new[:, 1] = (X_new[:, 0] - x) / h
         return X_new
 
+    def _compiled(self):
+        """The compiled local step, solves and residual of this factorization (particles.backends.factored)."""
+        if self._kernels is None:
+            from ..backends.factored import FactoredKernels  # noqa: PLC0415  (imports numba)
+            self._kernels = FactoredKernels(self._lu, self._Q_ff, self._i, self._j, self._k, self._L0,
+                                            self.system.m, self._free, self.system.d)
+        return self._kernels
+
     def _local(self, xt):
         """The springs' projections scattered, J d of shape (d, n_free), and their energy sum k (L - L0)^2 / 2."""
+        if self._fast is not None:
+            return self._fast.local(xt)
         d = pair_differences(xt.T, self._i, self._j)
         L = np.sqrt(np.einsum("as,as->s", d, d))
         d *= self._k * self._L0 / np.maximum(L, 1e-300)
@@ -216,7 +242,16 @@ class Prefactored(SpringSolver):
 
     def _global(self, b, Jd, h):
         """Free positions solving (M + h^2 L) x = M y + h^2 J d (pins on the right), shape (d, n_free)."""
+        if self._fast is not None:
+            return self._fast.solve(b, Jd, h * h)
         return self._lu.solve(np.ascontiguousarray((b + (h * h) * Jd).T)).T
+
+    def _gradient_norm(self, Q, u, b, Jd, h2):
+        """|g| with g = (Q u - b) / h^2 - J d, the gradient of Phi at the free positions u (a force, N)."""
+        if self._fast is not None:
+            return self._fast.gradient_norm(u, b, Jd, h2)
+        g = (np.array([Q @ u[a] for a in range(len(u))]) - b) / h2 - Jd  # a loop over the d coordinates
+        return float(np.linalg.norm(g))
 
     def _solve(self, xt, b, y_free, h, scale, t):
         """Anderson-accelerated local/global iterations until |g| <= tol f; returns the free positions."""
@@ -231,24 +266,30 @@ class Prefactored(SpringSolver):
         u = xt[:, free].copy()
         Jd, E = self._local(xt)
         phi = objective(u, E)
-        history_u, history_f = [], []  # Anderson: recent images G(u) and differences G(u) - u
+        # Anderson: the last image G(u) and difference G(u) - u, and the changes of both between iterations,
+        # kept as the rows of dG and dF (a ring of the `anderson` most recent; their order does not matter)
+        depth = max(self.anderson, 1)
+        dG, dF = np.empty((depth, u.size)), np.empty((depth, u.size))
+        last, kept = None, 0
         for iteration in range(self.max_iterations + 1):  # a loop over local/global iterations
-            g = (np.array([Q @ u[a] for a in range(len(u))]) - b) / h2 - Jd  # the gradient of Phi at u
-            if np.linalg.norm(g) <= self.tol * scale:
+            norm = self._gradient_norm(Q, u, b, Jd, h2)  # |g|, g the gradient of Phi at u
+            if norm <= self.tol * scale:
                 self.counts.append(iteration)
                 return u
             if iteration == self.max_iterations:
                 break
             image = self._global(b, Jd, h)
-            history_u.append(image.ravel())
-            history_f.append((image - u).ravel())
+            f = (image - u).ravel()
             candidate = image
-            if self.anderson and len(history_f) > 1:
-                del history_u[:-self.anderson - 1], history_f[:-self.anderson - 1]
-                dF = np.diff(np.array(history_f), axis=0).T
-                dG = np.diff(np.array(history_u), axis=0).T
-                gamma = _least_squares(dF, history_f[-1])
-                candidate = (history_u[-1] - dG @ gamma).reshape(u.shape)
+            if self.anderson and last is not None:
+                row = kept % depth
+                np.subtract(image.ravel(), last[0], out=dG[row])
+                np.subtract(f, last[1], out=dF[row])
+                kept += 1
+                rows = min(kept, depth)
+                gamma = _least_squares(dF[:rows], f)
+                candidate = (image.ravel() - gamma @ dG[:rows]).reshape(u.shape)
+            last = (image.ravel(), f)
             xt[:, free] = candidate
             Jd_c, E_c = self._local(xt)
             phi_c = objective(candidate, E_c)
@@ -257,11 +298,11 @@ class Prefactored(SpringSolver):
                 Jd_c, E_c = self._local(xt)
                 phi_c = objective(image, E_c)
                 candidate = image
-                del history_u[:-1], history_f[:-1]
+                kept = 0
             u, Jd, phi = candidate, Jd_c, phi_c
         self.counts.append(self.max_iterations)
         raise ConvergenceError(
             f"Prefactored: the residual did not reach tol = {self.tol:g} within max_iterations = "
             f"{self.max_iterations} local/global iterations at t = {t:.6g} s (h = {h:g} s, "
-            f"|g| / f = {np.linalg.norm(g) / max(scale, 1e-300):.3g}); raise max_iterations or tol, or "
+            f"|g| / f = {norm / max(scale, 1e-300):.3g}); raise max_iterations or tol, or "
             "take a smaller time step")

@@ -1,0 +1,137 @@
+"""The prefactorized solver's backends (NumPy, numba, auto) and the configurations of bench/bench_implicit.py.
+
+Both backends run the same Anderson-accelerated iteration; the compiled one
+replaces the local step, the triangular solves and the residual's norm,
+which agree with NumPy's to rounding (tests/library/backends/test_factored.py).
+A step then takes the same iterations, and its end state agrees to 1e-10
+relative: the rounding (1e-16) amplified by the iteration's small
+least-squares problems, far inside the solver's tolerance (a residual of
+0.1 of the forces). The bench's claim, that the implicit run's largest
+strain stays within the compiled explicit run's, is checked on its own
+configurations.
+"""
+
+import importlib.util
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from particles import backends
+from particles.implicit import Prefactored
+from particles.massspring import cloth
+
+NUMBA = pytest.mark.skipif("numba" not in backends.available(),
+                           reason="numba is not installed (pip install 'particles[fast]')")
+
+
+def stiff_cloth(n, modulus=5000.0):
+    """The README's stiff cloth (physical scaling, 0.2 kg/m^2), air damping 0.1 /s, two pinned corners."""
+    return cloth(n, n, scaling="physical", areal_density=0.2, stretch_modulus=modulus, damping=0.1)
+
+
+def _relative(a, b):
+    return float(np.abs(a - b).max() / np.abs(a).max())
+
+
+@NUMBA
+@pytest.mark.parametrize("h", [1 / 10, 1 / 30])
+def test_compiled_steps_agree_with_numpy(h):
+    """A run of the compiled solver takes NumPy's iterations and ends within 1e-10 (relative) of NumPy's states."""
+    runs = {}
+    for backend in ("numpy", "numba"):
+        c = stiff_cloth(16)
+        solver = Prefactored(c, h, backend=backend)
+        t, X = c.run(0.5, h, method=solver)
+        runs[backend] = (X, solver.counts, solver._fast is not None)
+    assert runs["numba"][2] and not runs["numpy"][2]  # each ran the path it was asked for
+    assert runs["numba"][1] == runs["numpy"][1] and min(runs["numpy"][1]) > 1
+    assert _relative(runs["numpy"][0], runs["numba"][0]) <= 1e-10
+
+
+@NUMBA
+def test_compiled_fixed_iterations_agree_with_numpy():
+    """Liu et al.'s fixed iterations: no residual, the same local and global steps: 1e-12 relative per step."""
+    out = {}
+    for backend in ("numpy", "numba"):
+        c = stiff_cloth(12)
+        out[backend] = Prefactored(c, 1 / 30, iterations=10, backend=backend).step(c.state(), 0.0, 1 / 30)
+    assert _relative(out["numpy"], out["numba"]) <= 1e-12
+
+
+@NUMBA
+def test_compiled_step_leaves_its_input_alone():
+    """The compiled step returns a new state and does not modify X (nor a refactorization at another h)."""
+    c = stiff_cloth(12)
+    X = c.state()
+    X[:, 1] = 0.1
+    before = X.copy()
+    solver = Prefactored(c, 1 / 30, backend="numba")
+    Y = solver.step(X, 0.0, 1 / 30)
+    Z = solver.step(X, 0.0, 1 / 60)  # another h: refactorized, new kernels
+    np.testing.assert_array_equal(X, before)
+    assert not np.shares_memory(Y, X) and not np.shares_memory(Z, X)
+    assert solver.h == 1 / 60 and np.abs(Y - Z).max() > 0
+
+
+@NUMBA
+def test_backend_choice_follows_the_package():
+    """backend: "numpy" and "numba" as asked; "auto" compiles from AUTO_MIN particles; None follows using()."""
+    small = stiff_cloth(8)
+    X = small.state()
+    for backend, compiled in (("numpy", False), ("numba", True), ("auto", False)):
+        solver = Prefactored(small, 1 / 30, backend=backend)
+        solver.step(X, 0.0, 1 / 30)
+        assert (solver._fast is not None) == compiled, backend
+    with backends.using("numba"):
+        solver = Prefactored(small, 1 / 30)
+        solver.step(X, 0.0, 1 / 30)
+        assert solver._fast is not None
+    with backends.using("numpy"):
+        solver.step(X, 0.0, 1 / 30)  # the choice is made at each step
+        assert solver._fast is None
+    large = stiff_cloth(64)  # 4096 = AUTO_MIN particles
+    solver = Prefactored(large, 1 / 30, backend="auto", iterations=1)
+    solver.step(large.state(), 0.0, 1 / 30)
+    assert (solver._fast is not None) == (backends.resolve("auto", large.n) == "numba")
+
+
+def test_backend_is_checked():
+    """An unknown backend is refused with a message naming the argument."""
+    with pytest.raises(ValueError, match="backend must be 'numpy', 'numba', 'auto' or None"):
+        Prefactored(stiff_cloth(4), 1 / 30, backend="fortran")
+
+
+def _bench():
+    """bench/bench_implicit.py as a module (its configurations)."""
+    path = Path(__file__).resolve().parents[3] / "bench" / "bench_implicit.py"
+    spec = importlib.util.spec_from_file_location("bench_implicit", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@NUMBA
+@pytest.mark.slow
+@pytest.mark.parametrize("modulus", [5000.0, 20000.0, 80000.0])
+def test_bench_configurations_honour_the_strain_criterion(modulus):
+    """The bench's longest implicit step keeps the largest strain within compiled explicit's (its first 0.25 s).
+
+    The explicit run's largest strain comes with the first drop; over its first 0.25 s it is at most its
+    largest over the bench's whole second, so the check is, if anything, stricter than the bench's.
+    """
+    bench = _bench()
+    assert modulus in bench.MODULI
+    with backends.using("numba"):
+        c = bench.make(64, modulus)
+        h = bench.explicit_config(c)
+        t, X = c.run(0.25, h, method="symplectic_euler", every=max(1, math.ceil(0.25 / h) // 100))
+    target = max(c.max_strain(x) for x in X)
+    c = bench.make(64, modulus)
+    h = bench.STEPS[0]
+    solver = Prefactored(c, h, backend="numba")
+    t, X = c.run(bench.T, h, method=solver)
+    strain = max(c.max_strain(x) for x in X)
+    assert 0.0 < strain <= target
+    assert t[-1] == pytest.approx(bench.T) and len(solver.counts) == round(bench.T / h)
