@@ -9,6 +9,7 @@ as a Verlet list keeps neighbours, for the pipeline of :mod:`particles.collision
 
 import numpy as np
 
+from ..backends import check_backend, kernels_for
 from .triangle_crossing import box_pairs
 
 __all__ = ["element_boxes", "candidate_elements", "candidates_in_boxes", "pair_rows", "candidate_pairs",
@@ -141,6 +142,9 @@ class CandidateCache:
         The cloth's thickness, in metres.
     eta : float
         The narrow phase's tolerance, in metres.
+    backend : {None, "auto", "numpy", "numba"}
+        Who searches and filters the pairs (:mod:`particles.backends`): NumPy, or the compiled grid of
+        :func:`particles.backends.cloth.cloth_candidates` (the same pairs).
 
     Attributes
     ----------
@@ -151,8 +155,9 @@ class CandidateCache:
     SKIN = 0.5
     FEW = 64  # up to this many vertices out of their boxes: a search around them only
 
-    def __init__(self, mesh, thickness, eta):
+    def __init__(self, mesh, thickness, eta, backend=None):
         self.mesh, self.thickness, self.eta = mesh, thickness, eta
+        self.backend = check_backend(backend)
         self.x0 = self.lo = self.hi = None  # start of the search, the vertices' boxes (in its frame)
         self.vf = self.ee = None  # sorted keys iv m + jf and ie e + je of the cached pairs
         self.searches = 0
@@ -166,6 +171,7 @@ class CandidateCache:
         """Make the cached candidates cover the motion x0 -> x0 + dx; returns its start and end in their frame."""
         mesh = self.mesh
         pad = (0.5 + self.SKIN) * self.thickness
+        fast = kernels_for(self.backend, mesh.n)
         if self.x0 is not None and self.x0.shape == x0.shape:
             a, b = self.frame(x0, dx)
             lo, hi = self.lo, self.hi
@@ -176,14 +182,16 @@ class CandidateCache:
             if far.sum() <= max(self.FEW, mesh.n // 16):  # grow those vertices' boxes, test them against every box
                 lo[far] = np.minimum(lo[far], np.minimum(a[far], b[far]))
                 hi[far] = np.maximum(hi[far], np.maximum(a[far], b[far]))
-                iv, jf, ie, je = candidates_touching(mesh, lo, hi, pad, far)
+                iv, jf, ie, je = candidates_touching(mesh, lo, hi, pad, far) if fast is None else \
+                    fast.cloth_candidates(mesh, lo, hi, pad, far)
                 self.vf = merge_keys(self.vf, iv * mesh.m + jf)
                 self.ee = merge_keys(self.ee, ie * len(mesh.edges) + je)
                 return a, b
         self.x0 = None
         a, b = self.frame(x0, dx)
         lo, hi = np.minimum(a, b), np.maximum(a, b)
-        iv, jf, ie, je = candidates_in_boxes(mesh, lo, hi, pad)
+        iv, jf, ie, je = candidates_in_boxes(mesh, lo, hi, pad) if fast is None else \
+            fast.cloth_candidates(mesh, lo, hi, pad)
         self.x0, self.lo, self.hi = x0.copy(), lo, hi
         self.vf, self.ee = iv * mesh.m + jf, ie * len(mesh.edges) + je
         self.searches += 1
@@ -197,6 +205,9 @@ class CandidateCache:
         """
         mesh = self.mesh
         a, b = self.update(x0, dx)
+        fast = kernels_for(self.backend, mesh.n)
+        if fast is not None:
+            return fast.cloth_cached_pairs(mesh, self.vf, self.ee, a, b, pad, moved)
         iv, jf = np.divmod(self.vf, max(mesh.m, 1))
         ie, je = np.divmod(self.ee, max(len(mesh.edges), 1))
         if moved is not None:
