@@ -8,8 +8,8 @@ numba. Each returns what the NumPy stage it replaces returns:
 * :func:`cloth_candidates`: the candidate pairs of
   :func:`particles.collisions.candidates.candidates_in_boxes` (the same
   sorted sets: a bucket grid walked box by box, :mod:`particles.backends._broad_kernels`);
-* :func:`cloth_cached_pairs`: the cached pairs whose swept boxes overlap
-  (:meth:`~particles.collisions.candidates.CandidateCache.pairs`, the same rows);
+  :meth:`~particles.collisions.candidates.CandidateCache.pairs` searches each call's own boxes with it,
+  which gives the rows its cache would (the cache only ever holds more pairs than the boxes select);
 * :func:`cloth_closest`, :func:`cloth_first_contacts`: the closest points
   of :mod:`particles.collisions.proximity` and the continuous test of
   :mod:`particles.collisions.ccd`, pair by pair (:mod:`particles.backends._contact_kernels`);
@@ -22,11 +22,11 @@ imports numba.
 
 import numpy as np
 
-from ._broad_kernels import box_candidates, cached_keep, corner_bounds
+from ._broad_kernels import box_candidates, corner_bounds
 from ._contact_kernels import closest_pairs, first_contact_pairs, jacobi_iteration, proximity_rows
 from ._kernels import incidence, pick
 
-__all__ = ["cloth_candidates", "cloth_cached_pairs", "cloth_closest", "cloth_proximity", "cloth_first_contacts",
+__all__ = ["cloth_candidates", "cloth_closest", "cloth_proximity", "cloth_first_contacts",
            "cloth_incidence", "cloth_jacobi"]
 
 _EMPTY_MASK = np.zeros(0, dtype=np.bool_)
@@ -68,44 +68,6 @@ def cloth_candidates(mesh, lo, hi, pad, vertices=None):
         keys = pick(box_candidates, len(E))(e_lo, e_hi, e_lo, e_hi, E, E, True, mask, masked)
         ie, je = np.divmod(keys, len(E))
     return iv, jf, ie, je
-
-
-def cloth_cached_pairs(mesh, vf, ee, a, b, pad, moved=None):
-    """The rows of the cached keys whose boxes swept over ``a -> b`` and inflated by ``pad / 2`` overlap.
-
-    Parameters
-    ----------
-    mesh : TriangleMesh
-    vf, ee : ndarray of int64
-        Sorted keys ``iv m + jf`` and ``ie e + je`` of the cache.
-    a, b : ndarray, shape (n, 3)
-        Start and end of each vertex's motion in the cache's frame, in metres.
-    pad : float
-        In metres.
-    moved : ndarray of bool, shape (n,), optional
-        Only pairs with one of these vertices.
-
-    Returns
-    -------
-    vf_rows, ee_rows : ndarray of int64, shape (p, 4), (q, 4)
-        As :func:`particles.collisions.candidates.pair_rows`.
-    """
-    F, E = mesh.faces, mesh.edges
-    keep_vf = np.empty(len(vf), dtype=np.bool_)
-    keep_ee = np.empty(len(ee), dtype=np.bool_)
-    mask = _EMPTY_MASK if moved is None else np.ascontiguousarray(moved, dtype=np.bool_)
-    pick(cached_keep, len(vf) + len(ee))(vf, ee, max(mesh.m, 1), max(len(E), 1), F, E, np.ascontiguousarray(a),
-                                         np.ascontiguousarray(b), 0.5 * pad, mask, moved is not None, keep_vf,
-                                         keep_ee)
-    iv, jf = np.divmod(vf[keep_vf], max(mesh.m, 1))
-    ie, je = np.divmod(ee[keep_ee], max(len(E), 1))
-    rows_vf = np.empty((len(iv), 4), dtype=np.int64)
-    rows_vf[:, 0] = iv
-    rows_vf[:, 1:] = F[jf]
-    rows_ee = np.empty((len(ie), 4), dtype=np.int64)
-    rows_ee[:, :2] = E[ie]
-    rows_ee[:, 2:] = E[je]
-    return rows_vf, rows_ee
 
 
 def cloth_closest(x, rows, edge, parallel_tol):
@@ -162,4 +124,5 @@ def cloth_jacobi(vbar, V, W, N, S, target, w, ptr, col, h, tol, friction, active
     (in the order of `col`). `active` (k,) is set to the contacts that got an impulse; `impulse` (k, 3)
     and `load` (n,) are work arrays.
     """
-    return jacobi_iteration(vbar, V, W, N, S, target, w, ptr, col, float(h), tol, friction, active, impulse, load)
+    return pick(jacobi_iteration, max(len(V), len(vbar)))(vbar, V, W, N, S, target, w, ptr, col, float(h), tol,
+                                                        friction, active, impulse, load)

@@ -54,7 +54,7 @@ def test_masked_candidates_are_the_numpy_sets():
 
 
 def test_cached_pairs_are_the_numpy_rows():
-    """The cache's filter gives the rows of the NumPy CandidateCache.pairs, with and without a moved mask."""
+    """Compiled, CandidateCache.pairs (a search of the call's own boxes) gives the NumPy cache's rows, masked or not."""
     mesh, x, dx = crumpled(4)
     ccs = [ClothCollisions(mesh, 0.02, backend=b) for b in ("numpy", "numba")]
     moved = np.zeros(mesh.n, dtype=bool)
@@ -64,6 +64,24 @@ def test_cached_pairs_are_the_numpy_rows():
         assert len(ref[0]) > 0 and len(ref[1]) > 0
         for a, b in zip(ref, got):
             np.testing.assert_array_equal(a, b)
+
+
+def test_pairs_agree_as_the_cache_is_reused_grown_and_searched_again():
+    """Over a sequence of motions (the cache reused, grown around a few vertices, searched again) the rows agree."""
+    mesh, x, dx = crumpled(9)
+    rng = np.random.default_rng(9)
+    ccs = [ClothCollisions(mesh, 0.02, backend=b) for b in ("numpy", "numba")]
+    for step in range(12):  # a loop over steps: small moves, a few fast vertices, then everything
+        move = np.zeros_like(x)
+        if step % 4 == 1:
+            move[rng.choice(mesh.n, 5)] = 0.05 * rng.standard_normal((5, 3))
+        elif step % 4 == 3:
+            move = 0.02 * rng.standard_normal(x.shape)
+        x = np.ascontiguousarray(x + move + 0.1)  # and a common translation
+        ref, got = (cc.candidates.pairs(x, 0.2 * dx, 0.02) for cc in ccs)
+        for a, b in zip(ref, got):
+            np.testing.assert_array_equal(a, b)
+    assert ccs[0].searches == ccs[1].searches > 1
 
 
 @pytest.mark.parametrize("edge", [False, True])
