@@ -8,10 +8,15 @@ the spacing, friction 0.3), and after every step the exact test
 :func:`particles.collisions.triangle_crossing.intersections` counts the crossing triangle
 pairs. The same sheet with the floor alone (no self-collision treatment) is
 the baseline of the same run. Printed per quarter second: time per step,
-the largest number of crossing pairs, the closest pair over the thickness.
+the largest number of crossing pairs, the closest pair over the thickness;
+then the median and the worst time per step and the crossing pairs at the
+worst step. ``--backend`` chooses who runs the collision stages
+(:mod:`particles.backends.cloth`; "auto": numba from 4096 particles);
+``--compare`` runs the treated sheet with NumPy and with numba side by side
+(a column each), after a warm-up that loads the compiled kernels.
 
     python bench/bench_cloth_fold.py            # 64^2, about 3 minutes on a quiet machine
-    python bench/bench_cloth_fold.py --n 32     # a quick look
+    python bench/bench_cloth_fold.py --n 32 --compare   # NumPy against numba
 """
 
 import argparse
@@ -44,13 +49,13 @@ def upright_sheet(n):
     return c
 
 
-def run(n, seconds, treat):
+def run(n, seconds, treat, backend=None):
     """Step the sheet; per step: wall time, crossing pairs, closest pair / thickness (None untreated)."""
     c = upright_sheet(n)
     mesh = TriangleMesh.grid(n, n)
     thickness = 0.5 / (n - 1)
     cc = ClothCollisions.from_system(c, mesh, thickness=thickness, bodies=[FLOOR], friction=0.3,
-                                     proximity=treat, ccd=treat, zones=treat)
+                                     proximity=treat, ccd=treat, zones=treat, backend=backend)
     step = cc.stepper(XPBD.from_system(c, substeps=10))
     rows = []
     for _ in range(round(seconds / H)):
@@ -64,30 +69,57 @@ def run(n, seconds, treat):
     return rows
 
 
-def report(label, rows, window=0.25):
+def summary(rows):
+    """Median and worst wall time per step (ms), and the most crossing pairs of a step."""
+    wall = 1e3 * np.array([r[1] for r in rows])
+    return float(np.median(wall)), float(wall.max()), max(r[2] for r in rows)
+
+
+def report(label, runs, window=0.25):
+    """Per window: ms per step of each run (columns), the most crossing pairs, the closest pair; then a summary."""
     print(f"\n{label}")
-    print(f"{'t (s)':>12} {'ms per step':>12} {'max crossing pairs':>19} {'closest / thickness':>20}")
-    t = np.array([r[0] for r in rows])
+    names = list(runs)
+    first = runs[names[0]]
+    print(f"{'t (s)':>12} " + " ".join(f"{'ms/step ' + k:>16}" for k in names)
+          + f" {'max crossing pairs':>19} {'closest / thickness':>20}")
+    t = np.array([r[0] for r in first])
     for lo in np.arange(0.0, t[-1] - 1e-9, window):
-        sel = [r for r in rows if lo < r[0] <= lo + window + 1e-9]
-        closest = [r[3] for r in sel if r[3] is not None]
-        print(f"{lo:5.2f}-{lo + window:4.2f} {1e3 * np.mean([r[1] for r in sel]):>12.0f} "
-              f"{max(r[2] for r in sel):>19d} {(f'{min(closest):.2f}' if closest else '-'):>20}")
-    return max(r[2] for r in rows), sum(r[1] for r in rows) / len(rows)
+        sel = {k: [r for r in rows if lo < r[0] <= lo + window + 1e-9] for k, rows in runs.items()}
+        closest = [r[3] for rows in sel.values() for r in rows if r[3] is not None]
+        crossing = max(r[2] for rows in sel.values() for r in rows)
+        print(f"{lo:5.2f}-{lo + window:4.2f} " + " ".join(f"{1e3 * np.mean([r[1] for r in sel[k]]):>16.1f}" for k in names)
+              + f" {crossing:>19d} {(f'{min(closest):.2f}' if closest else '-'):>20}")
+    for k in names:
+        median, worst, crossing = summary(runs[k])
+        print(f"{k}: median {median:.1f} ms per step, worst {worst:.1f} ms, most crossing pairs of a step "
+              f"{crossing}")
+    return {k: summary(rows) for k, rows in runs.items()}
+
+
+def warm_up():
+    """One step of a small sheet with the compiled stages: loads (or compiles) the kernels before the timing."""
+    run(8, H, True, backend="numba")
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=64, help="particles per side (default 64)")
     parser.add_argument("--seconds", type=float, default=2.0, help="simulated time (default 2 s)")
+    parser.add_argument("--backend", default="auto", choices=["auto", "numpy", "numba"],
+                        help="who runs the collision stages (default auto)")
+    parser.add_argument("--compare", action="store_true", help="the treated sheet with NumPy and with numba")
+    parser.add_argument("--no-baseline", action="store_true", help="skip the floor-only run")
     args = parser.parse_args(argv)
     print(f"{args.n}^2 sheet ({2 * (args.n - 1) ** 2} triangles), {args.seconds:g} s, h = {1e3 * H:g} ms, "
           f"load average {os.getloadavg()[0]:.2f}")
-    worst_base, cost_base = report("floor only (no self-collision treatment)", run(args.n, args.seconds, False))
-    worst, cost = report("ClothCollisions (proximity, continuous test, impact zones)", run(args.n, args.seconds, True))
-    print(f"\ncrossing pairs at the worst step: {worst_base} with the floor only, {worst} with ClothCollisions; "
-          f"cost per step x{cost / cost_base:.1f} of the untreated step")
-    if worst:
+    backends = ["numpy", "numba"] if args.compare else [args.backend]
+    if "numpy" != backends[-1]:
+        warm_up()
+    if not args.no_baseline:
+        report("floor only (no self-collision treatment)", {"floor": run(args.n, args.seconds, False)})
+    out = report("ClothCollisions (proximity, continuous test, impact zones)",
+                 {b: run(args.n, args.seconds, True, backend=b) for b in backends})
+    if any(crossing for _, _, crossing in out.values()):
         raise SystemExit("FAILED: triangles crossed")
 
 

@@ -105,8 +105,11 @@ Modules
 * :mod:`particles.backends.fixes`: Provot's pass and the collider as compiled fixes of a step's end state;
 * :mod:`particles.backends.factored`: the prefactorized implicit solver's local step, triangular solves
   over its kept factorization and residual (:class:`~particles.implicit.Prefactored` with ``backend=``);
+* :mod:`particles.backends.cloth`: the cloth collision pipeline's broad phase, proximity impulses and
+  continuous test, compiled (the same contacts and verdicts as NumPy);
 * ``_kernels.py``, ``_step_kernels.py``, ``_pbd_kernels.py``, ``_provot_kernels.py``,
-  ``_collider_kernels.py``, ``_factored_kernels.py``: the numba loops they call (private to the package).
+  ``_collider_kernels.py``, ``_factored_kernels.py``, ``_broad_kernels.py``, ``_contact_kernels.py``: the
+  numba loops they call (private to the package).
 
 Examples
 --------

@@ -18,10 +18,13 @@ from ._kernels import lennard_jones as lennard_jones_pairs
 from ._kernels import nbody as nbody_sums
 from ._pbd_kernels import distance_group, distance_jacobi
 from ._step_kernels import clamp_forces, symplectic_euler_blocks
+from .cloth import cloth_candidates, cloth_closest, cloth_first_contacts, cloth_incidence
+from .cloth import cloth_jacobi, cloth_proximity
 from .fixes import collide, provot
 
 __all__ = ["springs", "bending", "lennard_jones", "nbody", "distance_project", "CompiledStep", "StepParts",
-           "provot", "collide"]
+           "provot", "collide", "cloth_candidates", "cloth_closest", "cloth_proximity",
+           "cloth_first_contacts", "cloth_incidence", "cloth_jacobi"]
 
 
 def _store(owner):

@@ -9,6 +9,7 @@ as a Verlet list keeps neighbours, for the pipeline of :mod:`particles.collision
 
 import numpy as np
 
+from ..backends import check_backend, kernels_for
 from .triangle_crossing import box_pairs
 
 __all__ = ["element_boxes", "candidate_elements", "candidates_in_boxes", "pair_rows", "candidate_pairs",
@@ -141,6 +142,9 @@ class CandidateCache:
         The cloth's thickness, in metres.
     eta : float
         The narrow phase's tolerance, in metres.
+    backend : {None, "auto", "numpy", "numba"}
+        Who searches and filters the pairs (:mod:`particles.backends`): NumPy, or the compiled grid of
+        :func:`particles.backends.cloth.cloth_candidates` (the same pairs).
 
     Attributes
     ----------
@@ -151,8 +155,9 @@ class CandidateCache:
     SKIN = 0.5
     FEW = 64  # up to this many vertices out of their boxes: a search around them only
 
-    def __init__(self, mesh, thickness, eta):
+    def __init__(self, mesh, thickness, eta, backend=None):
         self.mesh, self.thickness, self.eta = mesh, thickness, eta
+        self.backend = check_backend(backend)
         self.x0 = self.lo = self.hi = None  # start of the search, the vertices' boxes (in its frame)
         self.vf = self.ee = None  # sorted keys iv m + jf and ie e + je of the cached pairs
         self.searches = 0
@@ -162,10 +167,16 @@ class CandidateCache:
         offset = np.median(x0 - self.x0, axis=0) if self.x0 is not None else np.zeros(3)
         return x0 - offset, x0 + dx - np.median(dx, axis=0) - offset
 
-    def update(self, x0, dx):
-        """Make the cached candidates cover the motion x0 -> x0 + dx; returns its start and end in their frame."""
+    def update(self, x0, dx, search=True):
+        """Make the cached candidates cover the motion x0 -> x0 + dx; returns its start and end in their frame.
+
+        Without `search`, only the frame and the boxes are kept up to date (the compiled :meth:`pairs`
+        searches the step's own boxes, which gives the same pairs), and the cached pairs are dropped.
+        """
         mesh = self.mesh
         pad = (0.5 + self.SKIN) * self.thickness
+        if search and self.vf is None:  # no pairs cached (the compiled backend ran): search anew
+            self.x0 = None
         if self.x0 is not None and self.x0.shape == x0.shape:
             a, b = self.frame(x0, dx)
             lo, hi = self.lo, self.hi
@@ -176,6 +187,8 @@ class CandidateCache:
             if far.sum() <= max(self.FEW, mesh.n // 16):  # grow those vertices' boxes, test them against every box
                 lo[far] = np.minimum(lo[far], np.minimum(a[far], b[far]))
                 hi[far] = np.maximum(hi[far], np.maximum(a[far], b[far]))
+                if not search:
+                    return a, b
                 iv, jf, ie, je = candidates_touching(mesh, lo, hi, pad, far)
                 self.vf = merge_keys(self.vf, iv * mesh.m + jf)
                 self.ee = merge_keys(self.ee, ie * len(mesh.edges) + je)
@@ -183,10 +196,13 @@ class CandidateCache:
         self.x0 = None
         a, b = self.frame(x0, dx)
         lo, hi = np.minimum(a, b), np.maximum(a, b)
-        iv, jf, ie, je = candidates_in_boxes(mesh, lo, hi, pad)
         self.x0, self.lo, self.hi = x0.copy(), lo, hi
-        self.vf, self.ee = iv * mesh.m + jf, ie * len(mesh.edges) + je
         self.searches += 1
+        if not search:
+            self.vf = self.ee = None
+            return a, b
+        iv, jf, ie, je = candidates_in_boxes(mesh, lo, hi, pad)
+        self.vf, self.ee = iv * mesh.m + jf, ie * len(mesh.edges) + je
         return a, b
 
     def pairs(self, x0, dx, pad, moved=None):
@@ -196,7 +212,11 @@ class CandidateCache:
         vertex-face rows ``(vertex, a, b, c)`` and the edge-edge rows ``(p_1, p_2, q_1, q_2)``.
         """
         mesh = self.mesh
-        a, b = self.update(x0, dx)
+        fast = kernels_for(self.backend, mesh.n)
+        a, b = self.update(x0, dx, search=fast is None)
+        if fast is not None:  # compiled: a search with the step's own boxes finds the pairs the cache would give
+            iv, jf, ie, je = fast.cloth_candidates(mesh, np.minimum(a, b), np.maximum(a, b), 0.5 * pad, moved)
+            return pair_rows(mesh, iv, jf, ie, je)
         iv, jf = np.divmod(self.vf, max(mesh.m, 1))
         ie, je = np.divmod(self.ee, max(len(mesh.edges), 1))
         if moved is not None:

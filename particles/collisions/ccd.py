@@ -59,7 +59,7 @@ import numpy as np
 from .._checks import as_float_array, nonnegative_number, positive_number
 from .candidates import candidate_pairs
 from .mesh import TriangleMesh
-from .proximity import dot, edge_edge_kernel, unit_or, vertex_face_kernel
+from .proximity import PARALLEL, dot, edge_edge_kernel, unit_or, vertex_face_kernel
 
 __all__ = ["cubic_roots", "coplanarity_cubic", "Impacts", "candidates", "overlapping", "first_contact", "detect",
            "BISECTIONS", "F_TOL"]
@@ -262,10 +262,14 @@ def overlapping(x0, x1, pairs, edge, pad):
                   axis=1)
 
 
-def detect_pairs(x0, dx, vf, ee, eta):
-    """:func:`particles.collisions.ccd.detect` on given candidate pairs."""
+def detect_pairs(x0, dx, vf, ee, eta, fast=None):
+    """:func:`particles.collisions.ccd.detect` on given candidate pairs (with `fast`, the compiled kernels)."""
     found = []
     for idx, edge in ((vf, False), (ee, True)):  # the two kinds of pairs
+        if fast is not None:  # pair by pair, compiled (particles.backends.cloth)
+            rows, W, N, T = fast.cloth_first_contacts(x0, dx, idx, edge, eta, F_TOL, BISECTIONS, PARALLEL)
+            found.append(Impacts(rows, W, N, T, np.full(len(T), edge)))
+            continue
         hits = first_contacts(x0[idx], dx[idx], edge, eta)
         found.append(Impacts(idx[hits.vertices[:, 0]], hits.weights, hits.normal, hits.time, hits.edge))
     return Impacts.concatenate(found)

@@ -111,13 +111,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import as_float_array, count, mass_array, nonnegative_number, pinned_indices, positive_number
+from ..backends import check_backend, kernels_for
 from ..integrators.solvers import after
 from ..xpbd.colouring import color_constraints
 from .bodies import BodyStage, StaticBody
 from .candidates import CandidateCache, candidate_pairs
 from .ccd import Impacts, detect_pairs
 from .mesh import TriangleMesh
-from .proximity import dot, edge_edge_kernel, vertex_face_kernel
+from .proximity import PARALLEL, dot, edge_edge_kernel, vertex_face_kernel
 from .surfaces import Surface
 from .zones import ImpactZoneStage
 
@@ -219,6 +220,9 @@ class ClothCollisions(BodyStage, ImpactZoneStage):
     tol : float
         The proximity iterations stop when no pair would end more than
         ``tol thickness`` short of its target (default 0.01).
+    backend : {None, "auto", "numpy", "numba"}
+        Who runs the broad phase, the proximity tests and Jacobi impulses, and the continuous test
+        (:mod:`particles.backends`; :mod:`particles.backends.cloth`: the same contacts and verdicts).
 
     Attributes
     ----------
@@ -246,7 +250,7 @@ class ClothCollisions(BodyStage, ImpactZoneStage):
 
     def __init__(self, mesh, thickness, m=1.0, *, pinned=(), friction=0.0, bodies=(), ccd=True, zones=True,
                  proximity=True, iterations=50, ccd_iterations=10, zone_iterations=100, x_rest=None, rest_distance=None,
-                 repulsion=0.1, separation=None, eta=None, method="jacobi", tol=0.01):
+                 repulsion=0.1, separation=None, eta=None, method="jacobi", tol=0.01, backend=None):
         if not isinstance(mesh, TriangleMesh):
             raise ValueError(f"mesh must be a particles.collisions.mesh.TriangleMesh, got {type(mesh).__name__}")
         self.mesh = mesh
@@ -287,7 +291,8 @@ class ClothCollisions(BodyStage, ImpactZoneStage):
         self.method = method
         self.last = ClothCollisionResult()
         self.history = []
-        self.candidates = CandidateCache(mesh, self.thickness, self.eta)
+        self.backend = check_backend(backend)
+        self.candidates = CandidateCache(mesh, self.thickness, self.eta, self.backend)
 
     @property
     def searches(self):
@@ -346,9 +351,14 @@ class ClothCollisions(BodyStage, ImpactZoneStage):
     def _proximity_contacts(self, x0, vbar, h):
         """Pairs within thickness at x0 or ending within it: vertices, weights, normals, distances."""
         vf, ee = self.candidates.pairs(x0, h * vbar, self.thickness)
+        fast = kernels_for(self.backend, self.n)
         parts = []
         for idx, edge in ((vf, False), (ee, True)):  # the two kinds of pairs
             if not len(idx):
+                continue
+            if fast is not None:  # the same tests pair by pair, compiled
+                parts.append(fast.cloth_proximity(x0, vbar, self.w, self.x_rest, idx, edge, h, self.thickness,
+                                                  self.rest_distance, PARALLEL))
                 continue
             p = x0[idx]
             close = (edge_edge_kernel if edge else vertex_face_kernel)(p[:, 0], p[:, 1], p[:, 2], p[:, 3])
@@ -382,8 +392,16 @@ class ClothCollisions(BodyStage, ImpactZoneStage):
         touched = np.zeros(len(V), dtype=bool)
         free = self.w[V] > 0
         groups = color_constraints(V, self.n) if self.method == "gauss-seidel" else None
+        fast = kernels_for(self.backend, self.n) if groups is None else None
+        if fast is not None:
+            ptr, col = fast.cloth_incidence(V, self.n)
+            active, impulse, load = np.empty(len(V), dtype=bool), np.empty((len(V), 3)), np.empty(self.n)
         for _ in range(self.iterations):  # a loop over iterations
-            if groups is None:
+            if fast is not None:  # compiled: the same iteration, summed per vertex in bincount's order
+                fast.cloth_jacobi(vbar, V, W, N, S, target, self.w, ptr, col, h, self.tol * self.thickness,
+                                  self.friction, active, impulse, load)
+                k = np.flatnonzero(active)
+            elif groups is None:
                 k = self._active(vbar, V, W, N, target, h)
                 if len(k):
                     share = np.where(free[k], np.abs(W[k]), 0.0)  # each free vertex's part in each contact
@@ -438,7 +456,8 @@ class ClothCollisions(BodyStage, ImpactZoneStage):
     def _detect(self, x0, vbar, h, moved=None):
         dx = h * vbar
         vf, ee = self.candidates.pairs(x0, dx, 2 * self.eta, moved)
-        return self._drop_fixed(detect_pairs(x0, dx - np.median(dx, axis=0), vf, ee, self.eta))
+        fast = kernels_for(self.backend, self.n)
+        return self._drop_fixed(detect_pairs(x0, dx - np.median(dx, axis=0), vf, ee, self.eta, fast))
 
     def _ccd_impulses(self, impacts, x0, vbar, h):
         """Inelastic impulses on colliding pairs, one vertex-disjoint colour group at a time."""

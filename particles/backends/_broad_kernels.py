@@ -1,0 +1,216 @@
+"""The broad phase of cloth collisions, compiled (numba): overlapping boxes of vertices, faces and edges.
+
+Imported only by :mod:`particles.backends.cloth`. The NumPy broad phase
+(:mod:`particles.collisions.candidates`) hashes boxes into a bucket grid with
+whole-array operations and sorts; here the same grid is a compressed-row
+table of the target boxes (faces, or edges) per cell, and each query box
+(a vertex's, or an edge's) walks the cells it covers, one loop iteration
+per query. A pair is reported from one cell only, the componentwise maximum
+of the two boxes' lowest cells, as :func:`particles.collisions.triangle_crossing.box_pairs`
+does, and the closed boxes are then compared exactly: the set of pairs does
+not depend on the grid, and it is the NumPy one. Each query writes its own
+slice of the output (sized by a bound from the cells it covers, each slice
+sorted), so the pairs come out sorted by key and with the same bits on any
+number of threads; no atomics.
+"""
+
+import math
+
+import numpy as np
+
+from ._kernels import _jit, prange
+
+# queries per block of the parallel passes (a fixed partition: the same blocks for any number of threads)
+QUERY_BLOCK = 256
+
+
+@_jit()
+def corner_bounds(v_lo, v_hi, idx, lo, hi):
+    """``lo[k] = min_j v_lo[idx[k, j]]`` and ``hi[k] = max_j v_hi[idx[k, j]]``: the box around an element's corners."""
+    for k in range(idx.shape[0]):
+        for a in range(3):
+            lo[k, a] = v_lo[idx[k, 0], a]
+            hi[k, a] = v_hi[idx[k, 0], a]
+        for j in range(1, idx.shape[1]):
+            for a in range(3):
+                lo[k, a] = min(lo[k, a], v_lo[idx[k, j], a])
+                hi[k, a] = max(hi[k, a], v_hi[idx[k, j], a])
+
+
+@_jit()
+def grid_shape(q_lo, q_hi, t_lo, t_hi):
+    """Origin, cell side and shape of a grid for query and target boxes (cell: the median target extent).
+
+    The cell doubles while the grid would have more than ``64 (queries + targets)`` cells or the targets
+    would cover more than 8 cells each on average.
+    """
+    origin = np.empty(3)
+    top = np.empty(3)
+    for a in range(3):
+        origin[a] = min(q_lo[:, a].min(), t_lo[:, a].min())
+        top[a] = max(q_hi[:, a].max(), t_hi[:, a].max())
+    extent = np.empty(len(t_lo))
+    for k in range(len(t_lo)):
+        extent[k] = max(t_hi[k, 0] - t_lo[k, 0], t_hi[k, 1] - t_lo[k, 1], t_hi[k, 2] - t_lo[k, 2])
+    cell = np.median(extent)
+    span = max(top[0] - origin[0], top[1] - origin[1], top[2] - origin[2])
+    if not cell > 0:
+        cell = span / len(t_lo) ** (1.0 / 3.0) if span > 0 else 1.0
+    cell = max(cell, span * 2.0 ** -40, 1e-300)
+    shape = np.empty(3, dtype=np.int64)
+    limit = 64.0 * (len(q_lo) + len(t_lo)) + 1024.0
+    while True:  # a loop over doublings of the cell
+        cells = 1.0
+        for a in range(3):
+            shape[a] = int(math.floor((top[a] - origin[a]) / cell)) + 1
+            cells *= shape[a]
+        covered = 0.0
+        for k in range(len(t_lo)):
+            c = 1.0
+            for a in range(3):
+                c *= math.floor((t_hi[k, a] - origin[a]) / cell) - math.floor((t_lo[k, a] - origin[a]) / cell) + 1
+            covered += c
+        if cells <= limit and covered <= 8.0 * len(t_lo) + 1024.0:
+            return origin, cell, shape
+        cell *= 2.0
+
+
+@_jit()
+def cell_of(x, origin, cell, shape, a):
+    """The grid cell of coordinate `x` along axis `a`, clamped to the grid (monotone in `x`)."""
+    c = int(math.floor((x - origin[a]) / cell))
+    return min(max(c, 0), shape[a] - 1)
+
+
+@_jit()
+def cell_table(t_lo, t_hi, origin, cell, shape):
+    """Targets per cell in compressed rows: ``ptr`` (cells + 1), ``items``; and each target's lowest cell (k, 3)."""
+    cells = shape[0] * shape[1] * shape[2]
+    low = np.empty((len(t_lo), 3), dtype=np.int64)
+    high = np.empty((len(t_lo), 3), dtype=np.int64)
+    ptr = np.zeros(cells + 1, dtype=np.int64)
+    for k in range(len(t_lo)):
+        for a in range(3):
+            low[k, a] = cell_of(t_lo[k, a], origin, cell, shape, a)
+            high[k, a] = cell_of(t_hi[k, a], origin, cell, shape, a)
+        for i in range(low[k, 0], high[k, 0] + 1):
+            for j in range(low[k, 1], high[k, 1] + 1):
+                for l in range(low[k, 2], high[k, 2] + 1):
+                    ptr[(i * shape[1] + j) * shape[2] + l + 1] += 1
+    for c in range(cells):
+        ptr[c + 1] += ptr[c]
+    fill = ptr[:-1].copy()
+    items = np.empty(ptr[cells], dtype=np.int64)
+    for k in range(len(t_lo)):  # in increasing target: each cell's list is sorted
+        for i in range(low[k, 0], high[k, 0] + 1):
+            for j in range(low[k, 1], high[k, 1] + 1):
+                for l in range(low[k, 2], high[k, 2] + 1):
+                    c = (i * shape[1] + j) * shape[2] + l
+                    items[fill[c]] = k
+                    fill[c] += 1
+    return ptr, items, low
+
+
+@_jit()
+def shares_vertex(A, ia, B, ib):
+    """Whether rows ``A[ia]`` and ``B[ib]`` of two index tables have a vertex in common."""
+    for p in range(A.shape[1]):
+        for q in range(B.shape[1]):
+            if A[ia, p] == B[ib, q]:
+                return True
+    return False
+
+
+@_jit()
+def query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, low, Q, T, same, mask, masked, out, start):
+    """The targets whose boxes overlap query `q`'s and share no vertex with it, into ``out[start:]``; their count.
+
+    With `same` (queries and targets are one set), only targets above `q`; with `masked`, only pairs with
+    a vertex in `mask`. Written in the order they are met (sorted by the caller).
+    """
+    found = 0
+    q_in = False
+    if masked:
+        for p in range(Q.shape[1]):
+            q_in = q_in or mask[Q[q, p]]
+    c0 = np.empty(3, dtype=np.int64)
+    c1 = np.empty(3, dtype=np.int64)
+    for a in range(3):
+        c0[a] = cell_of(q_lo[q, a], origin, cell, shape, a)
+        c1[a] = cell_of(q_hi[q, a], origin, cell, shape, a)
+    for i in range(c0[0], c1[0] + 1):
+        for j in range(c0[1], c1[1] + 1):
+            for l in range(c0[2], c1[2] + 1):
+                c = (i * shape[1] + j) * shape[2] + l
+                for e in range(ptr[c], ptr[c + 1]):
+                    t = items[e]
+                    if same and t <= q:
+                        continue
+                    # report from the cell at the componentwise maximum of the two lowest cells only
+                    if max(c0[0], low[t, 0]) != i or max(c0[1], low[t, 1]) != j or max(c0[2], low[t, 2]) != l:
+                        continue
+                    if not (q_lo[q, 0] <= t_hi[t, 0] and t_lo[t, 0] <= q_hi[q, 0] and q_lo[q, 1] <= t_hi[t, 1]
+                            and t_lo[t, 1] <= q_hi[q, 1] and q_lo[q, 2] <= t_hi[t, 2] and t_lo[t, 2] <= q_hi[q, 2]):
+                        continue
+                    if shares_vertex(Q, q, T, t):
+                        continue
+                    if masked and not q_in:
+                        t_in = False
+                        for p in range(T.shape[1]):
+                            t_in = t_in or mask[T[t, p]]
+                        if not t_in:
+                            continue
+                    out[start + found] = t
+                    found += 1
+    return found
+
+
+@_jit()
+def query_bound(q, q_lo, q_hi, origin, cell, shape, ptr):
+    """At most how many targets query `q` can find: the entries of the cells its box covers."""
+    bound = 0
+    i0, i1 = cell_of(q_lo[q, 0], origin, cell, shape, 0), cell_of(q_hi[q, 0], origin, cell, shape, 0)
+    j0, j1 = cell_of(q_lo[q, 1], origin, cell, shape, 1), cell_of(q_hi[q, 1], origin, cell, shape, 1)
+    l0, l1 = cell_of(q_lo[q, 2], origin, cell, shape, 2), cell_of(q_hi[q, 2], origin, cell, shape, 2)
+    for i in range(i0, i1 + 1):
+        for j in range(j0, j1 + 1):
+            c = (i * shape[1] + j) * shape[2]
+            bound += ptr[c + l1 + 1] - ptr[c + l0]
+    return bound
+
+
+@_jit(parallel=True)
+def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
+    """Sorted keys ``q len(T) + t`` of the overlapping query-target pairs that share no vertex.
+
+    Parameters: the boxes ``(lo, hi)`` of the queries and the targets (shape (k, 3)), their vertices `Q`
+    and `T` (index tables), `same` (one set: pairs ``q < t``), and a vertex `mask` used when `masked`.
+    Each query writes into its own slice of a buffer sized by :func:`query_bound` (one pass of tests),
+    sorts it, and the slices are joined in query order.
+    """
+    origin, cell, shape = grid_shape(q_lo, q_hi, t_lo, t_hi)
+    ptr, items, low = cell_table(t_lo, t_hi, origin, cell, shape)
+    nq = len(q_lo)
+    bounds = np.zeros(nq + 1, dtype=np.int64)
+    for q in range(nq):
+        bounds[q + 1] = bounds[q] + query_bound(q, q_lo, q_hi, origin, cell, shape, ptr)
+    found = np.zeros(nq + 1, dtype=np.int64)
+    targets = np.empty(bounds[nq], dtype=np.int64)
+    blocks = (nq + QUERY_BLOCK - 1) // QUERY_BLOCK
+    for b in prange(blocks):  # each block of queries alone, each query into its own slice
+        for q in range(b * QUERY_BLOCK, min(nq, (b + 1) * QUERY_BLOCK)):
+            s = bounds[q]
+            f = query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, low, Q, T, same, mask, masked,
+                      targets, s)
+            targets[s:s + f].sort()
+            found[q + 1] = f
+    for q in range(nq):
+        found[q + 1] += found[q]
+    keys = np.empty(found[nq], dtype=np.int64)
+    m = len(t_lo)
+    for b in prange(blocks):  # join the slices in query order
+        for q in range(b * QUERY_BLOCK, min(nq, (b + 1) * QUERY_BLOCK)):
+            s = bounds[q]
+            for e in range(found[q + 1] - found[q]):
+                keys[found[q] + e] = q * m + targets[s + e]
+    return keys

@@ -1,0 +1,218 @@
+"""The compiled cloth collision stages (particles.backends.cloth) against the NumPy reference."""
+
+import numpy as np
+import pytest
+
+numba = pytest.importorskip("numba")
+
+from particles.backends import cloth  # noqa: E402
+from particles.collisions import ClothCollisions, Plane, TriangleMesh, intersections  # noqa: E402
+from particles.collisions.candidates import candidates_in_boxes, candidates_touching  # noqa: E402
+from particles.collisions.ccd import BISECTIONS, F_TOL, first_contacts  # noqa: E402
+from particles.collisions.proximity import PARALLEL, edge_edge_kernel, vertex_face_kernel  # noqa: E402
+from particles.massspring import cloth as cloth_system  # noqa: E402
+from particles.xpbd import XPBD  # noqa: E402
+
+N = 12
+H = 0.01
+
+
+def crumpled(seed=0, n=N, noise=0.02):
+    """A sheet with random bumps of about `noise` m (pairs near and across each other), and a random motion."""
+    rng = np.random.default_rng(seed)
+    mesh = TriangleMesh.grid(n, n)
+    u, v = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
+    x = np.stack([u.ravel(), v.ravel(), 0.1 * np.sin(6 * u.ravel()) * np.cos(5 * v.ravel())], axis=1)
+    x += noise * rng.standard_normal(x.shape)
+    dx = 0.03 * rng.standard_normal(x.shape)
+    return mesh, np.ascontiguousarray(x), np.ascontiguousarray(dx)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_candidates_are_the_numpy_sets(seed):
+    """The compiled grid finds exactly the vertex-face and edge-edge pairs of the NumPy broad phase, sorted alike."""
+    mesh, x, dx = crumpled(seed)
+    lo, hi = np.minimum(x, x + dx), np.maximum(x, x + dx)
+    ref = candidates_in_boxes(mesh, lo, hi, 0.02)
+    got = cloth.cloth_candidates(mesh, lo, hi, 0.02)
+    assert len(ref[0]) > 100 and len(ref[2]) > 100
+    for a, b in zip(ref, got):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_masked_candidates_are_the_numpy_sets():
+    """With a vertex mask, the pairs holding one of those vertices, as candidates_touching finds them."""
+    mesh, x, dx = crumpled(3)
+    lo, hi = np.minimum(x, x + dx), np.maximum(x, x + dx)
+    mask = np.zeros(mesh.n, dtype=bool)
+    mask[np.random.default_rng(3).choice(mesh.n, 20, replace=False)] = True
+    ref = candidates_touching(mesh, lo, hi, 0.02, mask)
+    got = cloth.cloth_candidates(mesh, lo, hi, 0.02, mask)
+    assert len(ref[0]) > 0
+    for a, b in zip(ref, got):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_cached_pairs_are_the_numpy_rows():
+    """Compiled, CandidateCache.pairs (a search of the call's own boxes) gives the NumPy cache's rows, masked or not."""
+    mesh, x, dx = crumpled(4)
+    ccs = [ClothCollisions(mesh, 0.02, backend=b) for b in ("numpy", "numba")]
+    moved = np.zeros(mesh.n, dtype=bool)
+    moved[::7] = True
+    for mask in (None, moved):
+        ref, got = (cc.candidates.pairs(x, dx, 0.02, mask) for cc in ccs)
+        assert len(ref[0]) > 0 and len(ref[1]) > 0
+        for a, b in zip(ref, got):
+            np.testing.assert_array_equal(a, b)
+
+
+def test_pairs_agree_as_the_cache_is_reused_grown_and_searched_again():
+    """Over a sequence of motions (the cache reused, grown around a few vertices, searched again) the rows agree."""
+    mesh, x, dx = crumpled(9)
+    rng = np.random.default_rng(9)
+    ccs = [ClothCollisions(mesh, 0.02, backend=b) for b in ("numpy", "numba")]
+    for step in range(12):  # a loop over steps: small moves, a few fast vertices, then everything
+        move = np.zeros_like(x)
+        if step % 4 == 1:
+            move[rng.choice(mesh.n, 5)] = 0.05 * rng.standard_normal((5, 3))
+        elif step % 4 == 3:
+            move = 0.02 * rng.standard_normal(x.shape)
+        x = np.ascontiguousarray(x + move + 0.1)  # and a common translation
+        ref, got = (cc.candidates.pairs(x, 0.2 * dx, 0.02) for cc in ccs)
+        for a, b in zip(ref, got):
+            np.testing.assert_array_equal(a, b)
+    assert ccs[0].searches == ccs[1].searches > 1
+
+
+@pytest.mark.parametrize("edge", [False, True])
+def test_closest_points_agree(edge):
+    """Distances, normals and weights of the compiled closest points agree with proximity's to 1e-12."""
+    mesh, x, _ = crumpled(5)
+    lo, hi = x, x
+    iv, jf, ie, je = candidates_in_boxes(mesh, lo, hi, 0.05)
+    rows = np.concatenate([mesh.edges[ie], mesh.edges[je]], axis=1) if edge else \
+        np.concatenate([iv[:, None], mesh.faces[jf]], axis=1)
+    p = x[rows]
+    ref = (edge_edge_kernel if edge else vertex_face_kernel)(p[:, 0], p[:, 1], p[:, 2], p[:, 3])
+    distance, normal, weights = cloth.cloth_closest(x, rows, edge, PARALLEL)
+    np.testing.assert_allclose(distance, ref.distance, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(normal, ref.normal, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(weights, ref.weights, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("edge", [False, True])
+def test_first_contacts_give_the_same_verdicts(edge):
+    """The compiled cubic finds the same colliding pairs, times, normals and weights as ccd.first_contacts."""
+    mesh, x, dx = crumpled(6, noise=0.03)
+    dx = 4 * dx
+    iv, jf, ie, je = candidates_in_boxes(mesh, np.minimum(x, x + dx), np.maximum(x, x + dx), 1e-4)
+    rows = np.concatenate([mesh.edges[ie], mesh.edges[je]], axis=1) if edge else \
+        np.concatenate([iv[:, None], mesh.faces[jf]], axis=1)
+    ref = first_contacts(x[rows], dx[rows], edge, 1e-5)
+    got_rows, W, N_, T = cloth.cloth_first_contacts(x, dx, rows, edge, 1e-5, F_TOL, BISECTIONS, PARALLEL)
+    assert len(ref) > 5
+    np.testing.assert_array_equal(got_rows, rows[ref.vertices[:, 0]])
+    np.testing.assert_allclose(T, ref.time, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(N_, ref.normal, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(W, ref.weights, rtol=0, atol=1e-12)
+
+
+def fold(backend, steps, n=N):
+    """A sheet dropped upright on a floor, folding onto itself; the states and the results of each step."""
+    c = cloth_system(n, n, width=1.0, height=1.0, plane="vertical", origin=(-0.5, 0.0, 0.4), pins=None,
+                     scaling="physical", stretch_modulus=200.0, damping=0.2)
+    X = c.state()
+    X[:, 0, 1] += 0.05 * np.sin(np.pi * (X[:, 0, 0] + 0.5)) * (0.4 - X[:, 0, 2])
+    c.set_state(np.asfortranarray(X))
+    mesh = TriangleMesh.grid(n, n)
+    cc = ClothCollisions.from_system(c, mesh, thickness=0.5 / (n - 1), bodies=[Plane([0, 0, 0], [0, 0, 1.0])],
+                                     friction=0.3, backend=backend)
+    step = cc.stepper(XPBD.from_system(c, substeps=4, backend="numpy"))
+    states = []
+    for _ in range(steps):  # a loop over time steps
+        c.run(c.t + H, H, method=step)
+        states.append(c.X[:, 0].copy())
+    return mesh, states, cc.history
+
+
+def test_a_fold_never_crosses_itself():
+    """Compiled, a sheet folding on a floor has zero crossing triangle pairs at every step (the exact test)."""
+    mesh, states, history = fold("numba", 40)
+    assert sum(r.proximity for r in history) > 0
+    for x in states:  # a loop over steps
+        assert len(intersections(x, mesh.faces)) == 0
+
+
+@pytest.mark.parametrize("i", [0, 3, 8])
+def test_one_step_agrees_with_numpy(i):
+    """From the same state, a compiled step's treatment matches NumPy's: same counts, positions to 1e-12 m."""
+    mesh, states, _ = fold("numpy", 10)
+    x0, x1 = states[i], states[i] + 2.0 * (states[i + 1] - states[i])  # faster than the fold: more contacts
+    v1 = (x1 - x0) / H
+    out = []
+    for backend in ("numpy", "numba"):
+        cc = ClothCollisions(mesh, 0.5 / (N - 1), m=1.0 / N ** 2, bodies=[Plane([0, 0, 0], [0, 0, 1.0])],
+                             friction=0.3, x_rest=states[0], backend=backend)
+        out.append((*cc.resolve(x0, x1, v1, 0.0, H), cc.last))
+    (xa, va, ra), (xb, vb, rb) = out
+    assert ra.proximity > 0 and ra == rb
+    np.testing.assert_allclose(xb, xa, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(vb, va, rtol=0, atol=1e-10)
+
+
+def test_jacobi_iteration_agrees_with_numpy():
+    """One compiled Jacobi iteration of the proximity impulses changes vbar as ClothCollisions' NumPy one does."""
+    mesh, x, dx = crumpled(8)
+    cc = ClothCollisions(mesh, 0.03, m=np.linspace(1.0, 2.0, mesh.n), pinned=[0], friction=0.3, backend="numpy")
+    vbar = np.ascontiguousarray(dx / H)
+    contacts = cc._proximity_contacts(x, vbar, H)
+    V, W, N_, D = contacts
+    S = cc._effective(V, W)
+    target = np.where(D < cc.thickness, cc.repulsion * (cc.thickness - D), cc.thickness - D) / H
+    ref = vbar.copy()
+    k = cc._active(ref, V, W, N_, target, H)
+    free = cc.w[V] > 0
+    share = np.where(free[k], np.abs(W[k]), 0.0)
+    load = np.bincount(V[k].ravel(), share.ravel(), minlength=cc.n)
+    c = np.maximum(np.max(np.where(share > 0, load[V[k]], 0.0), axis=1), 1.0)
+    cc._impulses(ref, V[k], W[k], N_[k], S[k], target[k], c, disjoint=False)
+    got = vbar.copy()
+    ptr, col = cloth.cloth_incidence(V, cc.n)
+    active = np.empty(len(V), dtype=bool)
+    count = cloth.cloth_jacobi(got, V, W, N_, S, target, cc.w, ptr, col, H, cc.tol * cc.thickness, cc.friction,
+                               active, np.empty((len(V), 3)), np.empty(cc.n))
+    assert count == len(k) > 10
+    np.testing.assert_array_equal(np.flatnonzero(active), k)
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+
+
+def test_same_bits_on_one_and_two_threads():
+    """The compiled stages give the same bits on one thread and on two (fixed partitions, no atomics)."""
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("one thread only")
+    mesh, x, dx = crumpled(7, n=40)
+    lo, hi = np.minimum(x, x + dx), np.maximum(x, x + dx)
+    rows_of = lambda k: np.concatenate([k[0][:, None], mesh.faces[k[1]]], axis=1)  # noqa: E731
+    before = numba.get_num_threads()
+    out = []
+    try:
+        for threads in (1, 2):
+            numba.set_num_threads(threads)
+            from particles.backends._broad_kernels import box_candidates  # noqa: PLC0415  (the parallel one)
+            from particles.backends._contact_kernels import first_contact_pairs  # noqa: PLC0415
+            k = cloth.cloth_candidates(mesh, lo, hi, 0.01)
+            v_lo, v_hi = lo - 0.01, hi + 0.01
+            f_lo, f_hi = np.empty((mesh.m, 3)), np.empty((mesh.m, 3))
+            from particles.backends._broad_kernels import corner_bounds  # noqa: PLC0415
+            corner_bounds(v_lo, v_hi, mesh.faces, f_lo, f_hi)
+            keys = box_candidates(v_lo, v_hi, f_lo, f_hi, np.arange(mesh.n)[:, None], mesh.faces, False,
+                                  np.zeros(0, dtype=bool), False)
+            rows = rows_of(k)
+            hit, t = np.empty(len(rows), dtype=bool), np.full(len(rows), np.nan)
+            nrm, w = np.full((len(rows), 3), np.nan), np.full((len(rows), 4), np.nan)
+            first_contact_pairs(x, 4 * dx, rows, False, 1e-5, F_TOL, BISECTIONS, PARALLEL, hit, t, nrm, w)
+            out.append((keys, hit, t[hit], nrm[hit], w[hit]))
+    finally:
+        numba.set_num_threads(before)
+    for a, b in zip(*out):
+        assert a.tobytes() == b.tobytes()
