@@ -31,7 +31,7 @@ STAGES = {"body_vertices": "vertices moved out of a body", "proximity": "proximi
 """The counts of :class:`particles.collisions.ClothCollisionResult` recorded per step, and what they count."""
 
 
-def cloth_drop(stiffness, n=32, T=1.0, h=1 / 30, drop=0.1, radius=0.25, shift=0.1, friction=0.5,
+def cloth_drop(stiffness, n=32, T=0.8, h=1 / 40, drop=0.1, radius=0.25, shift=0.1, friction=0.5,
                snapshots=4):
     """A 1 m sheet of n x n particles dropped on a ball on the floor: it wraps the ball and folds on the floor.
 
