@@ -13,7 +13,8 @@ import numpy as np
 
 from .._checks import positive_number
 
-__all__ = ["figure_png", "slider_player", "plot_damped_spring", "plot_bounces", "plot_time_step", "plot_provot_passes"]
+__all__ = ["figure_png", "slider_player", "plot_damped_spring", "plot_bounces", "plot_time_step", "plot_provot_passes",
+           "plot_cloth_drop"]
 
 
 def figure_png(fig, dpi=72):
@@ -208,4 +209,39 @@ def plot_provot_passes(data):
     for a in (ax, ax_s):
         a.title.set_fontsize(9)
     fig.subplots_adjust(left=0.08, right=0.98, bottom=0.15, top=0.9, wspace=0.3)  # the same for every value
+    return fig
+
+
+def plot_cloth_drop(data):
+    """The sheet of :func:`particles.explore.cloth_drop`: snapshots in 3D, and what each stage did per step.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    shown, r = len(data["t_shown"]), data["radius"]
+    fig = plt.figure(figsize=(12, 6.2))
+    u, w = np.meshgrid(np.linspace(0, 2 * np.pi, 25), np.linspace(0, np.pi, 13))
+    ball = [r * np.cos(u) * np.sin(w), r * np.sin(u) * np.sin(w), r + r * np.cos(w)]
+    ny, nx = data["grid_shape"]
+    for k in range(shown):  # a loop over the few snapshots
+        ax = fig.add_subplot(2, shown, k + 1, projection="3d", computed_zorder=False)
+        ax.plot_surface(*ball, color="0.6", lw=0)
+        g = data["x"][k].reshape(ny, nx, 3)
+        ax.plot_surface(g[..., 0], g[..., 1], g[..., 2], color="C0", edgecolor="C0", lw=0.1, alpha=0.85)
+        ax.set(xlim=(-0.6, 0.6), ylim=(-0.6, 0.6), zlim=(0.0, data["x"][0][:, 2].max()),
+               xticks=[-0.5, 0, 0.5], yticks=[-0.5, 0, 0.5], zticks=[0, 0.3, 0.6], aspect="equal")
+        ax.view_init(elev=20, azim=-60)
+        ax.set_title(f"t = {data['t_shown'][k]:.2f} s", fontsize=9)
+    ax = fig.add_subplot(2, 1, 2)
+    for label, counts in data["stages"].items():  # a loop over the four stages
+        counts = np.asarray(counts, dtype=float)
+        ax.semilogy(data["t"], np.where(counts > 0, counts, np.nan), ".", ms=4, label=label)
+    ax.set(xlim=(0, data["T"]), ylim=(0.7, 1e4), xlabel="time t (s)", ylabel="per step",
+           title=f"stretch modulus {data['stiffness']:g} N/m, h = {1000 * data['h']:.1f} ms: "
+                 f"at most {int(np.max(data['crossings']))} crossing pairs of triangles in "
+                 f"{len(data['t'])} steps; lowest point at the end {100 * data['lowest']:.1f} cm")
+    ax.title.set_fontsize(10)
+    ax.legend(fontsize=8, loc="upper left")
+    fig.subplots_adjust(left=0.07, right=0.96, bottom=0.09, top=0.95, hspace=0.25)  # the same for every value
     return fig

@@ -220,8 +220,9 @@ def test_every_test_says_what_it_checks():
 PACKAGES = sorted(name.split(".")[1] for name, path in MODULES.items()
                   if path.name == "__init__.py" and name.count(".") == 1)
 ROOT_LIMIT, LINE_LIMIT = 15, 600
-# Tests of a concept that spans a package rather than one module (besides test_<package>.py).
-CONCEPT_TESTS = {"test_architecture", "test_force_contract", "test_md_nist"}
+# Tests of a concept that spans a package rather than one module (besides test_<package>.py);
+# test_bench_scripts: the set-ups of the scripts in bench/, built without timing them.
+CONCEPT_TESTS = {"test_architecture", "test_force_contract", "test_md_nist", "test_bench_scripts"}
 
 
 def test_the_root_holds_only_what_every_area_shares():

@@ -217,6 +217,22 @@ def test_bounce_height_ratio_is_eps_squared():
     assert exp.result(0.3)["heights"][2] < 0.01 and len(exp.result(1.0)["heights"]) == 6
 
 
+def test_cloth_drop_wraps_the_ball_and_reaches_the_floor_without_crossing():
+    """A 10^2 sheet dropped on the ball: no crossing pair after any step, the bodies stage holds it off
+    the ball and the floor, and the figure says so; a softer sheet sags lower."""
+    exp = Exploration(lambda Y: explore.cloth_drop(Y, n=10, T=0.6), figures.plot_cloth_drop,
+                      ("Y", [50.0, 1000.0]))
+    for Y in exp.values:
+        exp.value = Y
+        data = exp.data
+        assert data["crossings"].max() == 0 and len(data["crossings"]) == 24
+        assert data["stages"]["vertices moved out of a body"].max() > 0
+        assert 0.25 / 9 / 2 <= data["lowest"] < data["radius"]         # down the ball, off the floor
+        assert data["x"].shape == (4, 100, 3) and np.all(data["x"][-1, :, 2] >= data["lowest"])
+        assert "at most 0 crossing pairs" in exp.figure.axes[-1].get_title()
+    assert exp.result(50.0)["lowest"] <= exp.result(1000.0)["lowest"]
+
+
 def test_widget_of_a_lecture_exploration_switches_runs():
     """Through the widget: moving the slider of the restitution exploration gives that run's data."""
     pytest.importorskip("ipywidgets")
@@ -229,6 +245,7 @@ LECTURE_EXPLORATIONS = {
     "02_forces": ["damped_spring"],
     "03_collisions": ["bouncing_ball"],
     "07_stiffness_provot_implicit": ["curtain_time_step", "provot_passes"],
+    "09_cloth_collisions": ["cloth_drop"],
 }
 
 
