@@ -212,7 +212,7 @@ def test_a_failing_script_is_reported(tmp_path, browser):
 def test_the_course_site_of_the_real_lectures_works_offline(tmp_path, executed_lecture, browser):
     """The site of the course's own lectures, offline: an index in lecture order; every page loading
     without script errors and only the site's files, every equation typeset, every lecture's
-    animation player running, the explorations of lectures 2, 3 and 7 switching images on their
+    animation player running, the explorations of lectures 2, 3, 7 and 9 switching images on their
     sliders; linked exercises are copied."""
     paths = lecture_notebooks(ROOT / "lectures")
     executed = {path.name: executed_lecture(path) for path in paths}
@@ -222,7 +222,8 @@ def test_the_course_site_of_the_real_lectures_works_offline(tmp_path, executed_l
     index = (site / "index.html").read_text()
     titles = [notebook_summary(executed[p.name])[0] for p in paths]
     assert [index.index(html.escape(t)) for t in titles] == sorted(index.index(html.escape(t)) for t in titles)
-    explorations = {"02_forces.html": 1, "03_collisions.html": 1, "07_stiffness_provot_implicit.html": 2}
+    explorations = {"02_forces.html": 1, "03_collisions.html": 1, "07_stiffness_provot_implicit.html": 2,
+                    "09_cloth_collisions.html": 1}
     for page in pages:
         seen, tab = visit(browser, page, site)
         if page.name != "index.html":
