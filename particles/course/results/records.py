@@ -302,6 +302,21 @@ class SubmissionRecord(_HoldsTests):
         Digest of the graded file (``--resume`` keeps a record only for the same file).
     resumed : bool
         The record was kept from an earlier run.
+    written : list of dict
+        The people's grades of the written questions (merged from a rubric): one dict per question,
+        ``question`` (str), ``points`` (float or None: not graded yet), ``max_points`` (float),
+        ``comment`` (str), ``rubric`` (which rubric file and version).
+    late : dict or None
+        The late-work decision, None when no deadline applies: ``submitted`` and ``deadline`` (ISO 8601),
+        ``days_late`` (int), ``penalty`` (points taken off the total) and ``reason`` (one sentence).
+    tests_version : str
+        Digest of the exercise's tests that graded this record (a changed test regrades what it affects).
+
+    Notes
+    -----
+    The total of a record is ``score + written_score - penalty`` out of ``max_score + written_max``
+    (:attr:`total`, :attr:`total_max`): the tests, the people's grades of the written answers, and the
+    late penalty. Reports, the gradebook and the LMS exports use these two.
     """
 
     _what = "a submission record"
@@ -320,14 +335,44 @@ class SubmissionRecord(_HoldsTests):
     sandbox: str = ""
     notebook_sha256: str = ""
     resumed: bool = False
+    written: list = field(default_factory=list)
+    late: dict | None = None
+    tests_version: str = ""
 
     @property
     def score(self):
+        """Points of the autograded tests."""
         return score_of(self.tests)[0]
 
     @property
     def max_score(self):
+        """Points the autograded tests can give."""
         return score_of(self.tests)[1]
+
+    @property
+    def written_score(self):
+        """Points the people gave the written answers (questions not graded yet count 0)."""
+        return sum(float(w["points"]) for w in self.written if w.get("points") is not None)
+
+    @property
+    def written_max(self):
+        """Points the written questions can give."""
+        return sum(float(w.get("max_points", 0)) for w in self.written)
+
+    @property
+    def penalty(self):
+        """Points taken off for late work (0 when on time or no deadline applies)."""
+        return float(self.late["penalty"]) if self.late else 0.0
+
+    @property
+    def total(self):
+        """The exercise's grade: tests + written answers - late penalty, never below 0."""
+        return max(0.0, self.score + self.written_score - self.penalty)
+
+    @property
+    def total_max(self):
+        """The points the exercise can give: tests and written questions."""
+        return self.max_score + self.written_max
 
     def summary_lines(self):
         """The lines of Gradescope's top output for this exercise: score, notes, sandbox."""

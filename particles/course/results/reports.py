@@ -159,6 +159,9 @@ def feedback_html(student, results):
 def write_gradebook(path, rows, exercises):
     """Write the gradebook CSV: one row per student, one column per exercise, total, max_total.
 
+    An exercise's cell is the record's :attr:`~particles.course.results.records.SubmissionRecord.total`
+    (tests, written answers graded by people, minus the late penalty).
+
     Parameters
     ----------
     rows : dict
@@ -170,12 +173,12 @@ def write_gradebook(path, rows, exercises):
     maxima = {}
     for results in rows.values():
         for r in results:
-            maxima[r.exercise] = max(maxima.get(r.exercise, 0), r.max_score)
+            maxima[r.exercise] = max(maxima.get(r.exercise, 0), r.total_max)
     with open(path, "w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(["student", *exercises, "total", "max_total"])
         for student in sorted(rows):
-            by_exercise = {r.exercise: r.score for r in rows[student]}
+            by_exercise = {r.exercise: r.total for r in rows[student]}
             total = sum(by_exercise.values())
             writer.writerow([student, *[_fmt(by_exercise[e]) if e in by_exercise else "" for e in exercises],
                              _fmt(total), _fmt(sum(maxima.get(e, 0) for e in exercises))])
