@@ -7,7 +7,8 @@ written answers graded by people, minus the late penalty) and a total column.
 
 The roster (CSV, UTF-8, a header line, then one line per student; columns in any order, names compared
 case-insensitively, ``_`` and spaces alike; other columns are ignored, so Canvas's own gradebook export is a
-roster once ``--name-column`` names its column of the grader's names, e.g. ``"SIS Login ID"``):
+roster once ``--name-column`` names its column of the grader's names, e.g. ``"SIS Login ID"``; a
+cell is read without the white space around it):
 
 =================  ===============================  ==================================================
 column             also read under                  what
@@ -208,6 +209,9 @@ def _header(path, row, name_column):
         # --name-column "SIS Login ID": the column is both the grader's name and that identifier
         other = next(n for n, ts in ROSTER_COLUMNS.items() if n != NAME_COLUMN
                      and _title(name_column) in map(_title, ts))
+        if other in where:
+            raise RosterError(f"roster {path}, line 1: columns {where[other] + 1} and {where[NAME_COLUMN] + 1} "
+                              f"are both {other}")
         where[other] = where[NAME_COLUMN]
     return where
 
