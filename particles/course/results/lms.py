@@ -10,21 +10,21 @@ case-insensitively, ``_`` and spaces alike; other columns are ignored, so Canvas
 roster once ``--name-column`` names its column of the grader's names, e.g. ``"SIS Login ID"``; a
 cell is read without the white space around it):
 
-=================  ===============================  ==================================================
-column             also read under                  what
-=================  ===============================  ==================================================
-``submission_name``                                 the name the grader files the student under: the
-                                                    submission's folder (or notebook) name, e.g. a login
-                                                    (required; ``--name-column`` picks another column)
-``name``           ``Student``                      the student's name as the LMS shows it
-``canvas_id``      ``ID``                           Canvas's numeric user ID
-``sis_user_id``    ``SIS User ID``                  Canvas's SIS User ID
-``sis_login_id``   ``SIS Login ID``                 Canvas's SIS Login ID
-``section``        ``Section``                      Canvas's section (shown, not used to match)
-``email``          ``Email address``                Moodle's email address
-``username``       ``Username``                     Moodle's username
-``idnumber``       ``ID number``                    Moodle's ID number
-=================  ===============================  ==================================================
+=====================  ===================  ======================================================
+column                 also read under      what
+=====================  ===================  ======================================================
+``submission_name``                         the name the grader files the student under: the
+                                            submission's folder (or notebook) name, e.g. a login
+                                            (required; ``--name-column`` picks another column)
+``name``               ``Student``          the student's name as the LMS shows it
+``canvas_id``          ``ID``               Canvas's numeric user ID
+``sis_user_id``        ``SIS User ID``      Canvas's SIS User ID
+``sis_login_id``       ``SIS Login ID``     Canvas's SIS Login ID
+``section``            ``Section``          Canvas's section (shown, not used to match)
+``email``              ``Email address``    Moodle's email address
+``username``           ``Username``         Moodle's username
+``idnumber``           ``ID number``        Moodle's ID number
+=====================  ===================  ======================================================
 
 A roster is refused, naming its file and line, when it is empty, lacks the name column, repeats a name (as the
 grader compares them: :func:`particles.course.grading.discovery.student_key`) or a non-empty identifier, has a

@@ -1,4 +1,4 @@
-"""Grades into the LMS: Canvas's and Moodle's import CSVs checked against their documented columns, rosters, hostile names."""
+"""Grades into the LMS: Canvas's and Moodle's import CSVs against their documented columns; rosters, hostile names."""
 
 import csv
 import io
@@ -21,7 +21,8 @@ CANVAS_STUDENT_COLUMNS = ["Student", "ID", "SIS User ID", "SIS Login ID", "Secti
 CANVAS_NOT_ASSIGNMENTS = ["Current Score", "Current Points", "Current Grade", "Final Score", "Final Points",
                           "Final Grade", "Override Score", "Override Grade", "Override Status"]
 # Moodle, "Grade import" (CSV: map from an identifier column to a user field; a grade item or its feedback per column)
-# https://docs.moodle.org/en/Grade_import and https://github.com/moodle/moodle/blob/main/grade/import/csv/classes/load_data.php
+# https://docs.moodle.org/en/Grade_import and
+# https://github.com/moodle/moodle/blob/main/grade/import/csv/classes/load_data.php
 MOODLE_USER_FIELDS = {"Email address": "useremail", "Username": "username", "ID number": "useridnumber"}
 
 
@@ -111,7 +112,7 @@ def test_canvas_file_reads_as_canvas_importer_reads_it(course, tmp_path):
 
 
 def test_moodle_file_has_documented_columns(course, tmp_path):
-    """The Moodle file: an identifier Moodle maps to a user field, a grade and a feedback column per exercise, a total."""
+    """The Moodle file: an identifier Moodle maps to a user field, a grade and a feedback per exercise, a total."""
     out, roster = course
     for identifier, title in [("email", "Email address"), ("username", "Username"), ("idnumber", "ID number")]:
         export_grades(out, roster, moodle=tmp_path / "moodle.csv", moodle_id=identifier)
@@ -241,7 +242,8 @@ BAD_ROSTERS = [
     ("\n\n", "is empty: expected a header line"),
     ("submission_name,email\n", "has a header but no student"),
     ("name,email\nAnn,a@x\n", "line 1: no column 'submission_name'"),
-    ("submission_name,email\nAnn,a@x\nann,b@x\n", "line 3: the name 'ann' is the grader's 'ann', as the name on line 2"),
+    ("submission_name,email\nAnn,a@x\nann,b@x\n",
+     "line 3: the name 'ann' is the grader's 'ann', as the name on line 2"),
     ("submission_name,email\nAnn Lee,a@x\nann_lee,b@x\n", "line 3: the name 'ann_lee'"),
     ("submission_name,canvas_id\na,1\nb,1\n", "line 3: canvas_id '1' is also on line 2"),
     ("submission_name,email\na,A@x.org\nb,a@X.org\n", "line 3: email 'a@X.org' is also on line 2"),
