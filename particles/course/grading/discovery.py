@@ -21,7 +21,7 @@ from pathlib import Path
 
 from ..release.answers import count_answers
 
-__all__ = ["Unit", "find_submissions", "written_answers", "released_exercise", "notebook_digest"]
+__all__ = ["Unit", "find_submissions", "written_answers", "released_exercise", "notebook_digest", "student_key"]
 
 
 @dataclass
@@ -51,6 +51,16 @@ def _exercise_of(notebook, exercises, override=None):
 
 def _student_name(text):
     return re.sub(r"[^\w.@+-]+", "_", text).strip("_") or "submission"
+
+
+def student_key(text):
+    """The key two names of one student compare equal by: the grader's name for `text`, case-folded.
+
+    The grader files a submission under its folder's (or notebook's) name with every run of characters
+    other than letters, digits and ``. @ + -`` replaced by ``_``; a roster compares its names with the
+    records' the same way, whatever their case (``"Ann Lee"``, ``"ann_lee"`` and ``"ANN_LEE"`` are one key).
+    """
+    return _student_name(str(text)).casefold()
 
 
 def _preference(unit):

@@ -11,4 +11,6 @@ Modules:
   and HTML feedback;
 * :mod:`~particles.course.results.gradescope`: ``particles gradescope-bundle``: the autograder zip
   Gradescope runs.
+* :mod:`~particles.course.results.lms`: ``particles export``: the grades as Canvas's and Moodle's
+  gradebook import CSVs, students matched through a roster.
 """
