@@ -91,7 +91,7 @@ def _grade(args):
             args.submissions, args.out, jobs=args.jobs, exercise=args.exercise, public_only=args.public,
             seed=args.seed, time_limit=args.time_limit, memory_mb=args.memory_mb, root=_root(args),
             private=args.private, hidden_visibility=args.hidden_visibility, gradescope=args.gradescope,
-            progress=progress, isolation=args.isolation, resume=args.resume,
+            progress=progress, isolation=args.isolation, resume=args.resume, rubric=args.rubric,
         )
     except (ValueError, IsolationUnavailable) as error:
         print(f"particles grade: {error}", file=sys.stderr)
@@ -229,6 +229,9 @@ def build_parser():
                             "without the namespace sandbox")
     grade.add_argument("--resume", action="store_true",
                        help="keep the records in OUT/records of unchanged notebooks and grade only the rest")
+    grade.add_argument("--rubric", action="append", default=[], metavar="FILE",
+                       help="a rubric of the written answers (CSV, as `particles review` writes it) or a folder "
+                            "of them, merged into the records; repeatable; checked before grading (exit 2)")
     grade.set_defaults(run=_grade)
 
     new = sub.add_parser("new-exercise", help="write a template master and test module for a new exercise NN_topic",
