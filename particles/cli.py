@@ -121,6 +121,29 @@ def _grade(args):
     return 0
 
 
+def _review(args):
+    from .course.results.review import write_review
+
+    try:
+        summary = write_review(args.submissions, args.out, root=_root(args), exercise=args.exercise)
+    except ValueError as error:  # an unknown exercise, a master's unreadable points, a file in the way
+        print(f"particles review: {error}", file=sys.stderr)
+        return 2
+    for problem in summary["problems"]:
+        print(f"not reviewed: {problem}", file=sys.stderr)
+    if not summary["pages"]:
+        print("particles review: no written answers to review", file=sys.stderr)
+        return 1
+    print(f"wrote {len(summary['pages'])} question pages of {summary['students']} students: "
+          f"{Path(args.out) / 'index.html'}")
+    for path in summary["rubrics"]:
+        print(f"rubric to fill in: {path}")
+    if summary["kept"]:
+        print(f"kept {summary['kept']} graded row(s) already in the rubrics")
+    print(f"then: particles grade ... --rubric {args.out}")
+    return 0
+
+
 def _gradescope_bundle(args):
     from .course.results.gradescope import write_bundle
 
@@ -233,6 +256,19 @@ def build_parser():
                        help="a rubric of the written answers (CSV, as `particles review` writes it) or a folder "
                             "of them, merged into the records; repeatable; checked before grading (exit 2)")
     grade.set_defaults(run=_grade)
+
+    review = sub.add_parser("review", help="write one page per written question with every student's answer, "
+                            "and a rubric (CSV) to fill in",
+                            description="For each exercise and written question, write DIR/<exercise>/"
+                            "question-<k>.html (every student's answer side by side, with the figures it refers "
+                            "to; self-contained, no scripts) and DIR/<exercise>/rubric.csv (points and comments "
+                            "to fill in; rows already filled are kept), then grade with `particles grade ... "
+                            "--rubric DIR`.")
+    review.add_argument("submissions", nargs="+", metavar="SUBMISSION", help="a notebook or a folder of them")
+    review.add_argument("--out", required=True, metavar="DIR", help="the folder to write the pages and rubrics to")
+    review.add_argument("--exercise", help="read every notebook as this exercise (as `particles grade` does)")
+    review.add_argument("--root", help="the course folder (default: found from the current directory)")
+    review.set_defaults(run=_review)
 
     new = sub.add_parser("new-exercise", help="write a template master and test module for a new exercise NN_topic",
                          description="Write solutions/NN_topic.ipynb and tests/exercises/test_NN_topic.py from a "

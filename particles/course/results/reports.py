@@ -10,6 +10,11 @@ CSS and images, no scripts, no network) and in the Gradescope output of
 the tests that have them (``"output_format": "html"``; the others stay
 plain text). Importing this module loads Matplotlib's Agg canvas, so that
 the grading driver has all its code loaded before its first worker starts.
+
+Written answers graded by people (merged from a rubric, :mod:`particles.course.results.rubric`) appear
+per question with their points and comment in the feedback, in each exercise's total and in the
+gradebook; in Gradescope's output each written question is an entry of its own, marked for Gradescope's
+manual grading when no rubric graded it (:func:`gradescope_results`).
 """
 
 import csv
