@@ -153,6 +153,14 @@ def _gradescope_bundle(args):
         print(f"particles gradescope-bundle: {error}", file=sys.stderr)
         return 2
     print(f"wrote {args.out}: {len(names)} files (setup.sh, run_autograder, the library and the exercise tests)")
+    from .course.results.gradescope import manual_questions
+    from .course.paths import exercise_names
+
+    root = _root(args)
+    manual = manual_questions(root, [args.exercise] if args.exercise else exercise_names(root))
+    for name, questions in manual.items():
+        listed = ", ".join(f"question {k} ({p:g} points)" for k, p in sorted(questions.items()))
+        print(f"add manual questions on Gradescope for {name}: {listed} (see GRADESCOPE.md in the zip)")
     return 0
 
 

@@ -381,7 +381,7 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     isolation_module.protect_this_process()
     before = isolation_module.library_checksum()  # everything the driver needs is imported by now
     units, problems = find_submissions(paths, list(tests), exercise)
-    written = WrittenGrades.load(rubric, units, root)  # a bad rubric stops the run before it grades
+    written = WrittenGrades.load(rubric, units, root, [exercise] if exercise else [])  # a bad rubric: no grading
     if out is not None:
         out = Path(out)
         (out / "logs").mkdir(parents=True, exist_ok=True)

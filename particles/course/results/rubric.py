@@ -232,7 +232,7 @@ class WrittenGrades:
         self.questions = dict(questions or {})
 
     @classmethod
-    def load(cls, paths, units, root):
+    def load(cls, paths, units, root, exercises=()):
         """Read and check the rubric files `paths` against the notebooks `units` of a run.
 
         Parameters
@@ -243,13 +243,15 @@ class WrittenGrades:
             The run's notebooks (:func:`particles.course.grading.discovery.find_submissions`).
         root : path
             The course folder (the masters say what each question is worth).
+        exercises : sequence of str
+            More exercises whose questions to know (``--exercise`` when no notebook was found).
 
         Raises
         ------
         RubricError
             Listing every problem of every file (a ``ValueError``).
         """
-        exercises = sorted({u.exercise for u in units})
+        exercises = sorted({u.exercise for u in units} | set(exercises))
         questions = {name: exercise_questions(root, name) for name in exercises}
         students = {}
         for unit in units:
