@@ -107,6 +107,8 @@ def gradescope_results(student, results, hidden_visibility="after_published", ma
         data["score"] += sum(r.written_score for r in results)
         data["max_score"] += sum(r.written_max for r in results)
         data["extra_data"]["written"] = {r.exercise: r.written for r in results if r.written}
+        data["output"] = "\n".join([data["output"], *(f"{r.exercise}: {_written_summary(r)}" for r in results
+                                                      if r.written)]).strip()
     return data
 
 

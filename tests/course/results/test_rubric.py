@@ -146,6 +146,7 @@ def test_feedback_gradebook_and_results_show_the_written_grades(tmp_path):
     data = gradescope_results("ada", [ada], manual=written.manual())
     jsonschema.validate(data, GRADESCOPE_SCHEMA)
     assert data["score"] == 8.5 and data["max_score"] == 17
+    assert f"{EXERCISE}: Tests 4 / 10; written answers, graded by people, 4.5 / 7" in data["output"]
     entries = [t for t in data["tests"] if t["extra_data"].get("written")]
     assert [(t["score"], t["max_score"]) for t in entries] == [(2.5, 3), (2, 2), (0, 2)]
     assert entries[0]["output"] == "Graded by hand: Right idea; the order is 1."
