@@ -91,7 +91,7 @@ def _grade(args):
             args.submissions, args.out, jobs=args.jobs, exercise=args.exercise, public_only=args.public,
             seed=args.seed, time_limit=args.time_limit, memory_mb=args.memory_mb, root=_root(args),
             private=args.private, hidden_visibility=args.hidden_visibility, gradescope=args.gradescope,
-            progress=progress, isolation=args.isolation, resume=args.resume,
+            progress=progress, isolation=args.isolation, resume=args.resume, rubric=args.rubric,
         )
     except (ValueError, IsolationUnavailable) as error:
         print(f"particles grade: {error}", file=sys.stderr)
@@ -151,6 +151,29 @@ def _export(args):
     return 1 if export.unmatched or any(done["left_out"].values()) else 0
 
 
+def _review(args):
+    from .course.results.review import write_review
+
+    try:
+        summary = write_review(args.submissions, args.out, root=_root(args), exercise=args.exercise)
+    except ValueError as error:  # an unknown exercise, a master's unreadable points, a file in the way
+        print(f"particles review: {error}", file=sys.stderr)
+        return 2
+    for problem in summary["problems"]:
+        print(f"not reviewed: {problem}", file=sys.stderr)
+    if not summary["pages"]:
+        print("particles review: no written answers to review", file=sys.stderr)
+        return 1
+    print(f"wrote {len(summary['pages'])} question pages of {summary['students']} students: "
+          f"{Path(args.out) / 'index.html'}")
+    for path in summary["rubrics"]:
+        print(f"rubric to fill in: {path}")
+    if summary["kept"]:
+        print(f"kept {summary['kept']} graded row(s) already in the rubrics")
+    print(f"then: particles grade ... --rubric {args.out}")
+    return 0
+
+
 def _gradescope_bundle(args):
     from .course.results.gradescope import write_bundle
 
@@ -160,6 +183,14 @@ def _gradescope_bundle(args):
         print(f"particles gradescope-bundle: {error}", file=sys.stderr)
         return 2
     print(f"wrote {args.out}: {len(names)} files (setup.sh, run_autograder, the library and the exercise tests)")
+    from .course.results.gradescope import manual_questions
+    from .course.paths import exercise_names
+
+    root = _root(args)
+    manual = manual_questions(root, [args.exercise] if args.exercise else exercise_names(root))
+    for name, questions in manual.items():
+        listed = ", ".join(f"question {k} ({p:g} points)" for k, p in sorted(questions.items()))
+        print(f"add manual questions on Gradescope for {name}: {listed} (see GRADESCOPE.md in the zip)")
     return 0
 
 
@@ -259,7 +290,23 @@ def build_parser():
                             "without the namespace sandbox")
     grade.add_argument("--resume", action="store_true",
                        help="keep the records in OUT/records of unchanged notebooks and grade only the rest")
+    grade.add_argument("--rubric", action="append", default=[], metavar="FILE",
+                       help="a rubric of the written answers (CSV, as `particles review` writes it) or a folder "
+                            "of them, merged into the records; repeatable; checked before grading (exit 2)")
     grade.set_defaults(run=_grade)
+
+    review = sub.add_parser("review", help="write one page per written question with every student's answer, "
+                            "and a rubric (CSV) to fill in",
+                            description="For each exercise and written question, write DIR/<exercise>/"
+                            "question-<k>.html (every student's answer side by side, with the figures it refers "
+                            "to; self-contained, no scripts) and DIR/<exercise>/rubric.csv (points and comments "
+                            "to fill in; rows already filled are kept), then grade with `particles grade ... "
+                            "--rubric DIR`.")
+    review.add_argument("submissions", nargs="+", metavar="SUBMISSION", help="a notebook or a folder of them")
+    review.add_argument("--out", required=True, metavar="DIR", help="the folder to write the pages and rubrics to")
+    review.add_argument("--exercise", help="read every notebook as this exercise (as `particles grade` does)")
+    review.add_argument("--root", help="the course folder (default: found from the current directory)")
+    review.set_defaults(run=_review)
 
     new = sub.add_parser("new-exercise", help="write a template master and test module for a new exercise NN_topic",
                          description="Write solutions/NN_topic.ipynb and tests/exercises/test_NN_topic.py from a "

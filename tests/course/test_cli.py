@@ -1,6 +1,7 @@
 """`particles grade` and `particles.check` from the command line and from Python."""
 
 import csv
+import json
 import shutil
 from pathlib import Path
 
@@ -81,3 +82,56 @@ def test_grade_rejects_bad_limits(tmp_path, capsys, option, value, name):
     err = capsys.readouterr().err
     assert f"particles grade: {name} must be a finite number > 0" in err
     assert not (tmp_path / "out").exists()
+
+
+def _fill(rubric, grades):
+    """Fill `grades` ({student: (points, comment)}) into a rubric written by `particles review`."""
+    rows = list(csv.DictReader(open(rubric, newline="")))
+    for row in rows:
+        if row["student"] in grades:
+            row["points"], row["comment"] = grades[row["student"]]
+    with open(rubric, "w", newline="") as handle:
+        writer = csv.DictWriter(handle, list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+def test_review_then_grade_with_the_rubric_then_change_it(tmp_path, capsys):
+    """review writes the rubric; a bad rubric stops grade (status 2) before grading; a filled one is merged
+    into feedback, results.json and the gradebook; a changed one regrades with --resume, running no test."""
+    subs, review, out = tmp_path / "subs", tmp_path / "review", tmp_path / "out"
+    for student, source in (("ada", "solutions"), ("bob", "exercises")):
+        (subs / student).mkdir(parents=True)
+        shutil.copy(ROOT / source / "00_warmup.ipynb", subs / student / "00_warmup.ipynb")
+    assert main(["review", str(subs), "--out", str(review), "--root", str(ROOT)]) == 0
+    rubric = review / "00_warmup" / "rubric.csv"
+    bad = tmp_path / "bad.csv"
+    bad.write_text(rubric.read_text().replace(",bob,", ",eve,"))
+    grade = ["grade", str(subs), "--out", str(out), "--public", "--seed", "3", "--root", str(ROOT)]
+    capsys.readouterr()
+    assert main(grade + ["--rubric", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert f"{bad}, line 3: unknown student 'eve'" in err and "nothing was graded" in err
+    assert not (out / "records").exists()
+    _fill(rubric, {"ada": ("1.5", "Right; say why the error halves")})
+    assert main(grade + ["--rubric", str(review)]) == 0
+    rows = {r["student"]: r for r in csv.DictReader(open(out / "gradebook.csv"))}
+    assert (rows["ada"]["00_warmup"], rows["ada"]["max_total"]) == ("6.5", "7")  # 5 public points + 1.5 of 2
+    assert (rows["bob"]["00_warmup"], rows["bob"]["max_total"]) == ("0", "7")
+    assert "| Question 1 | 1.5 / 2 | Right; say why the error halves |" in (out / "ada" / "feedback.md").read_text()
+    assert "| Question 1 | 0 / 2 | no answer |" in (out / "bob" / "feedback.md").read_text()
+    (written,) = [t for t in json.loads((out / "ada" / "results.json").read_text())["tests"]
+                  if t["extra_data"].get("written")]
+    assert written["score"] == 1.5 and written["max_score"] == 2 and "sha256:" in written["extra_data"]["rubric"]
+    bob_before = (out / "bob" / "feedback.html").read_bytes()
+    _fill(rubric, {"ada": ("2", "Right")})
+    assert main(grade + ["--rubric", str(rubric), "--resume"]) == 0
+    assert "resumed: 2 record(s)" in capsys.readouterr().out
+    assert next(r for r in csv.DictReader(open(out / "gradebook.csv")) if r["student"] == "ada")["00_warmup"] == "7"
+    (again,) = [t for t in json.loads((out / "ada" / "results.json").read_text())["tests"]
+                if t["extra_data"].get("written")]
+    assert again["score"] == 2 and again["extra_data"]["rubric"] != written["extra_data"]["rubric"]
+    # bob's grade is the same, graded by the rubric's new version (its file's digest)
+    bob = json.loads((out / "bob" / "results.json").read_text())
+    assert bob["score"] == 0 and bob["extra_data"]["written"]["00_warmup"][0]["rubric"] == again["extra_data"]["rubric"]
+    assert b"0 / 2" in bob_before and "0 / 2" in (out / "bob" / "feedback.html").read_text()

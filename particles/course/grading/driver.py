@@ -59,6 +59,7 @@ from ..results.reports import feedback_html, feedback_markdown, gradescope_resul
 from ..walls.limits import check_limit
 from ..results.signing import TOKEN_FD, read_records, sign_records
 from ..results.store import RecordStore
+from ..results.rubric import WrittenGrades
 
 __all__ = ["Unit", "find_submissions", "grade_batch", "grade_unit", "grade", "catalog", "read_records",
            "sign_records", "TOKEN_FD", "written_answers", "LibraryChanged"]
@@ -290,7 +291,7 @@ def _batches(units, jobs, largest=20):
 
 def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=None, time_limit=None,
           memory_mb=None, root=None, private=(), hidden_visibility="after_published", python=None,
-          gradescope=None, progress=None, isolation="auto", resume=False, audit_hook=True):
+          gradescope=None, progress=None, isolation="auto", resume=False, audit_hook=True, rubric=()):
     """Grade submissions; write results.json and feedback per student and a gradebook.
 
     Parameters
@@ -337,6 +338,10 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     audit_hook : bool
         False leaves the workers with the operating system's walls only (see
         :func:`grade_batch`); for tests of those walls, never for grading.
+    rubric : sequence of path
+        Rubric files (or folders of them) of the written answers, checked before anything is graded
+        and merged into every record when the outputs are written
+        (:mod:`particles.course.results.rubric`).
 
     Returns
     -------
@@ -351,7 +356,8 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     ValueError
         On bad arguments (no exercise tests found, unknown exercise, jobs < 1,
         a `time_limit` or `memory_mb` that is not a finite number > 0, an
-        unknown isolation mode, `resume` without `out`).
+        unknown isolation mode, `resume` without `out`, a rubric that does not fit the submissions:
+        :class:`~particles.course.results.rubric.RubricError`).
     particles.course.walls.isolation.IsolationUnavailable
         When `isolation` is ``strict`` and the namespace sandbox cannot start.
     LibraryChanged
@@ -375,6 +381,7 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     isolation_module.protect_this_process()
     before = isolation_module.library_checksum()  # everything the driver needs is imported by now
     units, problems = find_submissions(paths, list(tests), exercise)
+    written = WrittenGrades.load(rubric, units, root, [exercise] if exercise else [])  # a bad rubric: no grading
     if out is not None:
         out = Path(out)
         (out / "logs").mkdir(parents=True, exist_ok=True)
@@ -401,7 +408,8 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
                 if store is not None:
                     store.save(result)
             if out is not None:  # what a stopped run leaves is already usable
-                _write_outputs(out, done, tests, hidden_visibility, students=[r.student for r in results])
+                _write_outputs(out, done, tests, hidden_visibility, students=[r.student for r in results],
+                               written=written)
         if progress is not None:
             for result in results:
                 progress(result)
@@ -437,7 +445,7 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
                f"planned: {plan.to_option()}", "resumed": len(units) - len(todo)}
     changed = isolation_module.library_changes(before)
     if out is not None:
-        _write_outputs(out, done, tests, hidden_visibility)
+        _write_outputs(out, done, tests, hidden_visibility, written=written)
         if changed:
             (out / "LIBRARY-CHANGED.txt").write_text(
                 "The installed particles library changed while these submissions were graded:\n"
@@ -448,7 +456,8 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
             tests_of = catalog(root, exercise, public_only, python)
             results = [SubmissionRecord(student="submission", exercise=exercise, sandbox=summary["isolation"],
                                         tests=[TestRecord.from_dict(t).failed(why) for t in tests_of])]
-        data = gradescope_results("submission", results, hidden_visibility)
+        written.apply(results)
+        data = gradescope_results("submission", results, hidden_visibility, manual=written.manual())
         if problems:
             data["output"] = "\n".join([data["output"], *problems]).strip()
         if changed:  # a compromised container: no score is better than a forged one
@@ -464,12 +473,17 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
 _written = {}  # (folder, hidden_visibility) -> digest of the results its files were last written from
 
 
-def _write_outputs(out, done, tests, hidden_visibility, students=None):
+def _write_outputs(out, done, tests, hidden_visibility, students=None, written=None):
     """results.json, feedback.md and feedback.html of `students` (default: all), and the gradebook, so far.
+
+    `written` (a :class:`~particles.course.results.rubric.WrittenGrades`) is merged first into every
+    record, so that a changed rubric rewrites exactly the students whose grades it changes.
 
     A student's files are rewritten only when their results changed since this
     process last wrote them (the final call of a run then draws no figure again).
     """
+    written = written or WrittenGrades()
+    written.apply(done.values())
     by_student = {}
     for (student, _), result in done.items():
         by_student.setdefault(student, []).append(result)
@@ -486,7 +500,8 @@ def _write_outputs(out, done, tests, hidden_visibility, students=None):
         if _written.get(key) == digest and all((folder / name).exists() for name in names):
             continue
         folder.mkdir(parents=True, exist_ok=True)
-        write_json(folder / "results.json", gradescope_results(student, results, hidden_visibility))
+        write_json(folder / "results.json", gradescope_results(student, results, hidden_visibility,
+                                                               manual=written.manual()))
         (folder / "feedback.md").write_text(feedback_markdown(student, results))
         (folder / "feedback.html").write_text(feedback_html(student, results), encoding="utf-8")
         _written[key] = digest

@@ -14,20 +14,34 @@ prompt, or wrote in markdown cells of their own right below it (a student who
 adds a cell under the prompt and leaves the prompt has answered). A slot that
 holds only the prompt, white space or nothing is blank; a deleted slot is
 blank too.
+
+Points. A question declares what it is worth in its bold header:
+``**Question 2 (3 points).**`` or ``**Question 1 (1 point).**`` (a whole or
+decimal number >= 0, then ``point`` or ``points``, in parentheses, inside
+the bold part). A question that declares nothing is worth
+:data:`DEFAULT_POINTS` (1 point); a header that mentions points in any other
+way is an error, never a guess. :func:`question_points` reads them, from a
+master or a released notebook alike (the release keeps the question's text).
+People grade these answers (``particles review`` and ``particles grade
+--rubric``, :mod:`particles.course.results.rubric`); the autograder does not.
 """
 
 import json
 import re
 from pathlib import Path
 
-__all__ = ["ANSWER_PROMPT", "SLOT_KEY", "slot_of", "answer_slots", "questions_of", "count_answers",
-           "answers_of", "is_blank", "solution_parts", "answers_note"]
+__all__ = ["ANSWER_PROMPT", "SLOT_KEY", "DEFAULT_POINTS", "slot_of", "answer_slots", "questions_of",
+           "question_points", "count_answers", "answers_of", "answer_cells", "model_answers", "is_blank",
+           "solution_parts", "answers_note"]
 
 ANSWER_PROMPT = "*Your answer here.*"
 BEGIN = "### BEGIN SOLUTION"  # the markers of a master's solution blocks (particles.course.release.notebooks uses them)
 END = "### END SOLUTION"
 SLOT_KEY = "answer"  # under the cell metadata's "particles"
 _QUESTION = re.compile(r"^\s*\*\*Question\s*([0-9]+)?[^*]*\*\*", re.M)
+_POINTS = re.compile(r"\(\s*([0-9]+(?:\.[0-9]+)?)\s+points?\s*\)")
+DEFAULT_POINTS = 1.0
+"""What a written question is worth when its header declares nothing."""
 
 
 def _source(cell):
@@ -85,8 +99,52 @@ def questions_of(released):
     return out
 
 
-def answers_of(submission, released):
-    """What a submission wrote in each slot of `released`: ``{k: text}`` ("" for a blank slot).
+def question_points(released):
+    """What each question is worth: ``{k: points}``, read from its ``**Question k (p points).**`` header.
+
+    Parameters
+    ----------
+    released : dict
+        A released notebook (or a master released with
+        :func:`particles.course.release.notebooks.release_notebook`).
+
+    Returns
+    -------
+    dict
+        Slot number -> points (float); :data:`DEFAULT_POINTS` for a question
+        that declares none.
+
+    Raises
+    ------
+    ValueError
+        When a header mentions points but not as ``(p points)`` or ``(1 point)``.
+
+    Examples
+    --------
+    >>> cell = {"cell_type": "markdown", "source": "**Question 1 (3 points).** Why?"}
+    >>> slot = {"cell_type": "markdown", "source": "", "metadata": {"particles": {"answer": 1}}}
+    >>> question_points({"cells": [cell, slot]})
+    {1: 3.0}
+    """
+    out = {}
+    for k, text in questions_of(released).items():
+        header = _QUESTION.match(text)
+        if header is None:
+            out[k] = DEFAULT_POINTS
+            continue
+        found = _POINTS.search(header.group(0))
+        if found:
+            out[k] = float(found.group(1))
+        elif re.search(r"point", header.group(0), re.I):
+            raise ValueError(f"question {k}: cannot read its points from {header.group(0)!r}; expected "
+                             "e.g. '**Question 2 (3 points).**' or '**Question 1 (1 point).**'")
+        else:
+            out[k] = DEFAULT_POINTS
+    return out
+
+
+def answer_cells(submission, released):
+    """Where a submission answers each slot of `released`: ``{k: [cell indices]}`` (empty for a deleted slot).
 
     Slots are found by metadata, else by cell id. Markdown cells the student
     added right below a slot (ids that the released notebook does not have)
@@ -95,21 +153,37 @@ def answers_of(submission, released):
     slots = answer_slots(released)
     by_id = {cid: k for k, cid in slots if cid}
     known = {c.get("id") for c in released.get("cells", []) if isinstance(c, dict)}
-    texts = {k: [] for k, _ in slots}
+    where = {k: [] for k, _ in slots}
     current = None
-    for cell in submission.get("cells", []) if isinstance(submission.get("cells"), list) else []:
+    cells = submission.get("cells") if isinstance(submission.get("cells"), list) else []
+    for index, cell in enumerate(cells):
         if not isinstance(cell, dict):
             continue
         k = slot_of(cell) or by_id.get(cell.get("id"))
-        if k in texts:
+        if k in where:
             current = k
-            texts[k].append(_source(cell))
+            where[k].append(index)
         elif current is not None and cell.get("cell_type") == "markdown" and cell.get("id") not in known:
-            texts[current].append(_source(cell))  # the student's own cell under the prompt
+            where[current].append(index)  # the student's own cell under the prompt
         else:
             current = None
-    return {k: "" if is_blank("\n\n".join(parts)) else "\n\n".join(parts).replace(ANSWER_PROMPT, "").strip()
-            for k, parts in texts.items()}
+    return where
+
+
+def answers_of(submission, released):
+    """What a submission wrote in each slot of `released`: ``{k: text}`` ("" for a blank slot).
+
+    The cells of each answer are those of :func:`answer_cells`.
+    """
+    cells = submission.get("cells") if isinstance(submission.get("cells"), list) else []
+    texts = {k: "\n\n".join(_source(cells[i]) for i in where)
+             for k, where in answer_cells(submission, released).items()}
+    return {k: "" if is_blank(text) else text.replace(ANSWER_PROMPT, "").strip() for k, text in texts.items()}
+
+
+def model_answers(master):
+    """The master's answers, its solution blocks in markdown cells: ``{k: text}`` (k = 1, 2, ... in order)."""
+    return dict(enumerate(_master_blocks(master), start=1))
 
 
 def solution_parts(source):

@@ -10,7 +10,12 @@ Modules:
 * :mod:`~particles.course.results.reports`: Gradescope ``results.json``, the gradebook CSV, Markdown
   and HTML feedback;
 * :mod:`~particles.course.results.gradescope`: ``particles gradescope-bundle``: the autograder zip
-  Gradescope runs.
+  Gradescope runs (written questions listed for its manual grading);
+* :mod:`~particles.course.results.review`: ``particles review``: one page per written question with every
+  student's answer side by side, and the rubric to fill in;
+* :mod:`~particles.course.results.markup`: students' Markdown as safe HTML (no markup of theirs survives);
+* :mod:`~particles.course.results.rubric`: rubrics (CSV) of the written answers, checked and merged into
+  the records (``particles grade --rubric``);
 * :mod:`~particles.course.results.lms`: ``particles export``: the grades as Canvas's and Moodle's
   gradebook import CSVs, students matched through a roster.
 """

@@ -4,8 +4,16 @@ Gradescope unpacks the zip into ``/autograder/source``, runs ``setup.sh`` once
 when the image is built, then ``run_autograder`` for every submission, with
 the student's files in ``/autograder/submission`` and the results expected in
 ``/autograder/results/results.json``. The bundle holds the library, the
-exercise tests (public *and* hidden: the students never see this zip) and the
-two scripts; never the masters or the grader's own test corpus.
+exercise tests (public *and* hidden: the students never see this zip), the
+released exercises (what the students have: the grader reads their written
+questions from them), ``GRADESCOPE.md`` and the two scripts; never the
+masters or the grader's own test corpus.
+
+Written questions are graded by people. On Gradescope, each is an entry of
+``results.json`` worth 0 points that says so (:func:`particles.course.results.reports.gradescope_results`),
+and ``GRADESCOPE.md`` lists them with their points: add each as a manual
+question in the assignment's outline (with manual grading turned on), so
+that Gradescope adds its points to the autograder's score.
 
 ``run_autograder`` honours two variables, for testing it outside Gradescope:
 ``AUTOGRADER_ROOT`` (default ``/autograder``) and ``PARTICLES_PYTHON`` (default
@@ -20,8 +28,9 @@ import zipfile
 from pathlib import Path
 
 from ..paths import exercise_tests
+from .rubric import exercise_questions
 
-__all__ = ["SETUP_SH", "run_autograder_script", "write_bundle"]
+__all__ = ["SETUP_SH", "run_autograder_script", "write_bundle", "manual_questions", "manual_note"]
 
 SETUP_SH = """#!/usr/bin/env bash
 # Gradescope runs this once, as root, when it builds the autograder image.
@@ -75,6 +84,28 @@ exit 0
 """
 
 
+def manual_questions(root, exercises):
+    """The written questions of `exercises` and their points: ``{exercise: {k: points}}`` (those with some)."""
+    found = {name: exercise_questions(root, name) for name in exercises}
+    return {name: questions for name, questions in found.items() if questions}
+
+
+def manual_note(manual):
+    """``GRADESCOPE.md``: what to set up on Gradescope, the manual questions and their points."""
+    lines = ["# Setting up this autograder on Gradescope", "",
+             "Upload this zip as the autograder of a programming assignment. The autograder scores the tests; "
+             "the written answers are graded by people.", ""]
+    if not manual:
+        return "\n".join(lines + ["This assignment has no written question.", ""])
+    lines += ["Turn on manual grading in the assignment's settings and add one manual question per written "
+              "question to its outline, with these points (results.json lists each as a 0-point entry saying "
+              "\"graded by hand on Gradescope\"):", "", "| exercise | question | points |", "| --- | ---: | ---: |"]
+    lines += [f"| {name} | {k} | {points:g} |" for name, questions in manual.items()
+              for k, points in sorted(questions.items())]
+    total = sum(p for questions in manual.values() for p in questions.values())
+    return "\n".join(lines + ["", f"Manual questions in all: {total:g} points.", ""])
+
+
 def _add(archive, path, arcname, executable=False):
     info = zipfile.ZipInfo(arcname, date_time=(2020, 1, 1, 0, 0, 0))
     mode = 0o755 if executable else 0o644
@@ -101,7 +132,7 @@ def write_bundle(root, out, exercise=None):
     Returns
     -------
     list of str
-        The names in the zip, in order.
+        The names in the zip, in order (``GRADESCOPE.md`` third: the manual questions to add).
     """
     root, out = Path(root), Path(out)
     tests = exercise_tests(root)
@@ -118,11 +149,16 @@ def write_bundle(root, out, exercise=None):
         files.append((root / "tests" / "conftest.py", "tests/conftest.py"))
     for name, path in tests.items():
         files.append((path, f"tests/exercises/{path.name}"))
+    for name in tests if exercise is None else [exercise]:  # the written questions, read as the students see them
+        if (root / "exercises" / f"{name}.ipynb").exists():
+            files.append((root / "exercises" / f"{name}.ipynb", f"exercises/{name}.ipynb"))
+    note = manual_note(manual_questions(root, list(tests) if exercise is None else [exercise]))
     out.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.NamedTemporaryFile(dir=out.parent, suffix=".zip", delete=False) as tmp:
         with zipfile.ZipFile(tmp, "w") as archive:
             _add(archive, SETUP_SH, "setup.sh", executable=True)
             _add(archive, run_autograder_script(exercise), "run_autograder", executable=True)
+            _add(archive, note, "GRADESCOPE.md")
             for path, arcname in files:
                 _add(archive, path, arcname)
     shutil.move(tmp.name, out)

@@ -10,6 +10,11 @@ CSS and images, no scripts, no network) and in the Gradescope output of
 the tests that have them (``"output_format": "html"``; the others stay
 plain text). Importing this module loads Matplotlib's Agg canvas, so that
 the grading driver has all its code loaded before its first worker starts.
+
+Written answers graded by people (merged from a rubric, :mod:`particles.course.results.rubric`) appear
+per question with their points and comment in the feedback, in each exercise's total and in the
+gradebook; in Gradescope's output each written question is an entry of its own, marked for Gradescope's
+manual grading when no rubric graded it (:func:`gradescope_results`).
 """
 
 import csv
@@ -34,22 +39,119 @@ def _records(results):
     return [r if isinstance(r, SubmissionRecord) else SubmissionRecord.from_dict(r) for r in results]
 
 
-gradescope_results = to_gradescope  # the name this module gave it first
+MANUAL_OUTPUT = ("Written answer, graded by hand on Gradescope ({points} points): instructors, add a manual "
+                 "question for it in the assignment's outline")
+"""What Gradescope shows under a written question that no rubric graded here."""
+
+
+def _written_entry(exercise, k, top, entry, answered):
+    """One written question as an entry of Gradescope's ``tests`` list."""
+    graded = entry is not None and entry.get("points") is not None
+    if graded:
+        output = "Graded by hand" + (f": {entry['comment']}" if entry.get("comment") else "")
+    elif entry is not None:
+        output = "Written answer: not graded yet" + (f" ({entry['comment']})" if entry.get("comment") else "")
+    else:
+        output = MANUAL_OUTPUT.format(points=_fmt(top))
+    extra = {"question": k, "points": top, "written": True, "answered": answered}
+    if entry is not None and entry.get("rubric"):
+        extra["rubric"] = entry["rubric"]
+    return {"name": f"{exercise}: Question {k} (written answer, {_fmt(top)} points)",
+            "number": f"{exercise[:2]}.w{k}",
+            "score": float(entry["points"]) if graded else 0.0,
+            "max_score": float(top) if entry is not None else 0.0,
+            "output": output, "output_format": "text", "visibility": "visible",
+            "tags": [exercise, "written", "manual grading" if entry is None else "rubric"],
+            "extra_data": extra}
+
+
+def gradescope_results(student, results, hidden_visibility="after_published", manual=None):
+    """Gradescope's ``results.json`` (a dict), with the written questions marked.
+
+    Parameters
+    ----------
+    student : str
+    results : list of SubmissionRecord
+    hidden_visibility : str
+        Gradescope visibility of hidden tests (one of :data:`VISIBILITIES`).
+    manual : dict, optional
+        exercise -> ``{k: points}`` of its written questions
+        (:meth:`particles.course.results.rubric.WrittenGrades.manual`).
+
+    Returns
+    -------
+    dict
+        :func:`~particles.course.results.records.to_gradescope`'s, and one entry per written question
+        after each exercise's tests. A question a rubric graded (the record's ``written``) scores its
+        points out of ``max_points``, and the top-level ``score`` and ``max_score`` include them; any
+        other written question scores 0 out of 0 and says that it is graded by hand on Gradescope, worth
+        its points (a manual question of the assignment's outline).
+    """
+    results = _records(results)
+    data = to_gradescope(student, results, hidden_visibility)
+    manual = manual or {}
+    tests, rest = [], list(data["tests"])
+    for result in results:
+        tests += rest[:len(result.tests)]
+        rest = rest[len(result.tests):]
+        blank = set((result.written_answers or {}).get("blank") or [])
+        if result.written:
+            questions = {int(w["question"]): w for w in result.written}
+            points = {k: float(w.get("max_points", 0)) for k, w in questions.items()}
+        else:
+            questions, points = {}, manual.get(result.exercise, {})
+        tests += [_written_entry(result.exercise, k, top, questions.get(k), k not in blank)
+                  for k, top in sorted(points.items())]
+    data["tests"] = tests + rest
+    if any(r.written for r in results):
+        data["score"] += sum(r.written_score for r in results)
+        data["max_score"] += sum(r.written_max for r in results)
+        data["extra_data"]["written"] = {r.exercise: r.written for r in results if r.written}
+        data["output"] = "\n".join([data["output"], *(f"{r.exercise}: {_written_summary(r)}" for r in results
+                                                      if r.written)]).strip()
+    return data
 
 
 def _cell(text):
     return str(text).replace("|", "\\|").replace("\n", " ")
 
 
+def _totals(results):
+    """(total, total_max) of a student's records: tests, written answers, late penalties."""
+    return sum(r.total for r in results), sum(r.total_max for r in results)
+
+
+def _written_points(entry):
+    top = _fmt(float(entry.get("max_points", 0)))
+    return f"{_fmt(float(entry['points']))} / {top}" if entry.get("points") is not None else \
+        f"not graded yet / {top}"
+
+
+def _written_summary(result):
+    return (f"Tests {_fmt(result.score)} / {_fmt(result.max_score)}; written answers, graded by people, "
+            f"{_fmt(result.written_score)} / {_fmt(result.written_max)}")
+
+
+def _written_markdown(result):
+    """The lines of a record's written answers: a table of points and comments (none without a rubric)."""
+    if not result.written:
+        return []
+    out = [_written_summary(result) + ":", "", "| question | points | comment |", "| --- | ---: | --- |"]
+    out += [f"| Question {_cell(w['question'])} | {_written_points(w)} | {_cell(w.get('comment', ''))} |"
+            for w in result.written]
+    versions = sorted({w["rubric"] for w in result.written if w.get("rubric")})
+    return out + ["", *(f"- Written answers graded with the rubric {v}" for v in versions)]
+
+
 def feedback_markdown(student, results):
     """Per-student feedback in Markdown: scores, a table of tests, reasons, how to reproduce."""
     results = _records(results)
-    score, top = score_of(t for r in results for t in r.tests)
+    score, top = _totals(results)
     out = [f"# Feedback for {student}", "", f"**Total: {_fmt(score)} / {_fmt(top)} points**", ""]
     if any(t.figures for r in results for t in r.tests):
         out += ["Figures of your curves beside the reference's are in `feedback.html`, beside this file.", ""]
     for result in results:
-        out += [f"## {result.exercise}: {_fmt(result.score)} / {_fmt(result.max_score)}", ""]
+        out += [f"## {result.exercise}: {_fmt(result.total)} / {_fmt(result.total_max)}", ""]
         if result.notebook:
             out += [f"Graded notebook: `{result.notebook}`", ""]
         out += ["| | test | points | what happened |", "| --- | --- | ---: | --- |"]
@@ -59,6 +161,7 @@ def feedback_markdown(student, results):
             out.append(f"| {mark} | {_cell(name)} | {_fmt(test.score)} / {_fmt(test.max_score)} | "
                        f"{_cell('' if test.passed else test.reason)} |")
         out.append("")
+        out += _written_markdown(result)
         out += [f"- {note}" for note in result.notes]
         if result.seed is not None and any(t.hidden for t in result.tests):
             out.append(f"- Hidden tests drew their random parameters with seed {result.seed}.")
@@ -105,6 +208,21 @@ def _figures_row(test):
             f'<div class="figure-list">{inner}</div></details></td></tr>')
 
 
+def _written_html(result):
+    """A record's written answers as an HTML table ("" without a rubric)."""
+    if not result.written:
+        return ""
+    e = html.escape
+    rows = "".join(f'<tr><td>Question {e(str(w["question"]))}</td><td class="points">{e(_written_points(w))}'
+                   f'</td><td>{e(w.get("comment", ""))}</td></tr>' for w in result.written)
+    versions = sorted({w["rubric"] for w in result.written if w.get("rubric")})
+    return (f'<p class="meta">{e(_written_summary(result))}</p>'
+            '<table class="written"><colgroup><col class="test"><col class="points"><col></colgroup>'
+            f"<thead><tr><th>written answer</th><th>points</th><th>comment</th></tr></thead><tbody>{rows}"
+            "</tbody></table>" + "".join(f'<p class="meta">Graded with the rubric <code>{e(v)}</code></p>'
+                                         for v in versions))
+
+
 def feedback_html(student, results):
     """Per-student feedback as one self-contained HTML page: scores, tests, reasons, figures.
 
@@ -123,7 +241,7 @@ def feedback_html(student, results):
     """
     e = html.escape
     results = _records(results)
-    score, top = score_of(t for r in results for t in r.tests)
+    score, top = _totals(results)
     out = ['<!DOCTYPE html>', '<html lang="en">', "<head>", '<meta charset="utf-8">',
            '<meta http-equiv="Content-Security-Policy" content="default-src \'none\'; img-src data:; '
            'style-src \'unsafe-inline\'">',
@@ -131,8 +249,8 @@ def feedback_html(student, results):
            f"<title>Feedback for {e(student)}</title>", f"<style>{_CSS}</style>", "</head>", "<body><main>",
            f"<h1>Feedback for {e(student)}</h1>", f'<p class="total">Total: {_fmt(score)} / {_fmt(top)} points</p>']
     for result in results:
-        out.append(f'<section class="exercise"><h2>{e(result.exercise)}: {_fmt(result.score)} / '
-                   f'{_fmt(result.max_score)}</h2>')
+        out.append(f'<section class="exercise"><h2>{e(result.exercise)}: {_fmt(result.total)} / '
+                   f'{_fmt(result.total_max)}</h2>')
         if result.notebook:
             out.append(f'<p class="meta">Graded notebook: <code>{e(str(result.notebook))}</code></p>')
         out.append('<table><colgroup><col class="mark"><col class="test"><col class="points"><col></colgroup>'
@@ -146,6 +264,7 @@ def feedback_html(student, results):
                        f'<td class="reason">{"" if test.passed else e(test.reason)}</td></tr>')
             out.append(_figures_row(test))
         out.append("</tbody></table>")
+        out.append(_written_html(result))
         notes = [e(n) for n in result.notes]
         if result.seed is not None and any(t.hidden for t in result.tests):
             notes.append(f"Hidden tests drew their random parameters with seed {e(str(result.seed))}.")

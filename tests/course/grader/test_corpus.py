@@ -50,7 +50,8 @@ def test_every_submission_yields_a_record(graded):
     assert {r["student"] for r in rows} == set(graded["names"])
     for name in graded["names"]:
         data = json.loads((graded["out"] / name / "results.json").read_text())
-        assert data["max_score"] == 11 and len(data["tests"]) == 8
+        tests = [t for t in data["tests"] if not t["extra_data"].get("written")]  # + its written question, by hand
+        assert data["max_score"] == 11 and len(tests) == 8 and len(data["tests"]) == 9
         assert (graded["out"] / name / "feedback.md").read_text().startswith(f"# Feedback for {name}")
         assert all(t["grader_error"] is False for t in _tests(graded, name).values())
 
@@ -140,4 +141,4 @@ def test_worker_restarts_are_reported(graded):
 def test_fake_results_do_not_leak(graded):
     """A submission that writes a fake results.json cannot touch the grader's outputs."""
     data = json.loads((graded["out"] / "writes_a_fake_results_json" / "results.json").read_text())
-    assert data["score"] < 11 and len(data["tests"]) == 8
+    assert data["score"] < 11 and len([t for t in data["tests"] if not t["extra_data"].get("written")]) == 8

@@ -6,7 +6,8 @@ from pathlib import Path
 import nbformat
 import pytest
 
-from particles.course.release.answers import ANSWER_PROMPT, answer_slots, count_answers, questions_of
+from particles.course.release.answers import (ANSWER_PROMPT, answer_slots, count_answers, model_answers,
+                                              question_points, questions_of)
 from particles.course.grading.discovery import released_exercise
 from particles.course.release.notebooks import release_notebook
 
@@ -104,3 +105,38 @@ def test_every_stub_answers_0_of_n_and_every_master_n_of_n(exercise):
     stub = json.loads((ROOT / "exercises" / f"{exercise}.ipynb").read_text())
     assert count_answers(stub, released) == {"asked": asked, "answered": 0, "blank": list(range(1, asked + 1))}
     assert count_answers(master, released)["answered"] == asked
+
+
+@pytest.mark.parametrize("header, points", [
+    ("**Question 1 (3 points).** Why?", 3.0), ("**Question 1 (1 point).** Why?", 1.0),
+    ("**Question 1 (2.5 points).** Why?", 2.5), ("**Question 1.** (3 points, before you code) Why?", 1.0),
+    ("**Question 1.** Why?", 1.0)])
+def test_question_points_are_read_from_the_bold_header(header, points):
+    """A question's points are the ``(p points)`` of its bold header; without them it is worth 1 point."""
+    master = _master()
+    master["cells"][3]["source"] = f"{header}\n### BEGIN SOLUTION\nNow.\n### END SOLUTION"
+    released = json.loads(json.dumps(release_notebook(master, "07_test")))
+    assert question_points(released) == {1: 1.0, 2: 1.0, 3: points}
+
+
+@pytest.mark.parametrize("header", ["**Question 1 (three points).**", "**Question 1 (3 pts, 3 points).**",
+                                    "**Question 1 (points: 3).**"])
+def test_a_header_that_mentions_points_otherwise_is_an_error(header):
+    """Points written in any other way are an error naming the question, never a guess."""
+    master = _master()
+    master["cells"][1]["source"] = f"{header} Why?\n### BEGIN SOLUTION\nNow.\n### END SOLUTION"
+    released = json.loads(json.dumps(release_notebook(master, "07_test")))
+    with pytest.raises(ValueError, match=r"question 1: cannot read its points .*expected"):
+        question_points(released)
+
+
+@pytest.mark.parametrize("exercise", EXERCISES)
+def test_every_master_question_declares_its_points(exercise):
+    """Every question of every master says what it is worth (2 or 3 points), and the release keeps it."""
+    released = released_exercise(ROOT, exercise)
+    points = question_points(released)
+    assert points and set(points.values()) <= {2.0, 3.0}, points
+    stub = json.loads((ROOT / "exercises" / f"{exercise}.ipynb").read_text())
+    assert question_points(stub) == points
+    master = json.loads((ROOT / "solutions" / f"{exercise}.ipynb").read_text())
+    assert len(model_answers(master)) == len(points)

@@ -47,13 +47,17 @@ def _run_autograder(root):
 
 
 def test_bundle_contents(bundle):
-    """The zip holds the two scripts (executable), the library and all exercise tests; no masters, no corpus."""
+    """The zip holds the two scripts (executable), the library, all exercise tests and the released exercise
+    (its written questions), and GRADESCOPE.md listing the manual questions; no masters, no corpus."""
     with zipfile.ZipFile(bundle) as archive:
         names = archive.namelist()
         modes = {i.filename: (i.external_attr >> 16) & 0o777 for i in archive.infolist()}
     assert names[:2] == ["setup.sh", "run_autograder"] and modes["run_autograder"] == 0o755
     assert "tests/exercises/test_00_warmup.py" in names and "particles/course/worker/main.py" in names
-    assert not [n for n in names if n.startswith(("solutions", "tests/grader", "exercises"))]
+    assert not [n for n in names if n.startswith(("solutions", "tests/grader"))]
+    assert [n for n in names if n.startswith("exercises")] == ["exercises/00_warmup.ipynb"]
+    note = zipfile.ZipFile(bundle).read("GRADESCOPE.md").decode()
+    assert "| 00_warmup | 1 | 2 |" in note and "manual question" in note
     setup = zipfile.ZipFile(bundle).read("setup.sh").decode()
     assert "pip install" in setup
     assert subprocess.run(["bash", "-n", "-c", setup]).returncode == 0
@@ -64,7 +68,13 @@ def test_run_autograder_grades_the_master(bundle, tmp_path):
     root = _autograder_tree(bundle, tmp_path / "autograder", (ROOT / "solutions" / "00_warmup.ipynb").read_text())
     results = _run_autograder(root)
     assert results["score"] == results["max_score"] == 11
-    assert len(results["tests"]) == 8 and {t["status"] for t in results["tests"]} == {"passed"}
+    tests = [t for t in results["tests"] if not t["extra_data"].get("written")]
+    assert len(tests) == 8 and {t["status"] for t in tests} == {"passed"}
+    # the written question: 0 of 0 here, graded by hand on Gradescope for its 2 points
+    (written,) = [t for t in results["tests"] if t["extra_data"].get("written")]
+    assert written["score"] == written["max_score"] == 0 and written["extra_data"]["answered"] is True
+    assert "graded by hand on Gradescope (2 points)" in written["output"]
+    assert "Written answers: 1 of 1 filled in" in results["output"]
     assert {"name", "score", "max_score", "status", "output", "visibility"} <= set(results["tests"][0])
     assert results["execution_time"] > 0 and "00_warmup: 11 / 11" in results["output"]
     # the same sandbox as `particles grade`, and the output says which layers were active
@@ -78,7 +88,7 @@ def test_run_autograder_survives_a_broken_submission(bundle, tmp_path):
     root = _autograder_tree(bundle, tmp_path / "autograder", "this is not JSON")
     results = _run_autograder(root)
     assert results["score"] == 0 and results["max_score"] == 11
-    assert all("could not be read" in t["output"] for t in results["tests"])
+    assert all("could not be read" in t["output"] for t in results["tests"] if not t["extra_data"].get("written"))
 
 
 def test_run_autograder_writes_a_result_even_when_grading_cannot_start(bundle, tmp_path):
@@ -98,4 +108,5 @@ def test_run_autograder_with_no_notebook(bundle, tmp_path):
     (root / "submission" / "notes.txt").write_text("I forgot the notebook")
     results = _run_autograder(root)
     assert results["score"] == 0 and results["max_score"] == 11
-    assert all("no notebook" in t["output"] for t in results["tests"])
+    assert all("no notebook" in t["output"] for t in results["tests"] if not t["extra_data"].get("written"))
+    assert [t["max_score"] for t in results["tests"] if t["extra_data"].get("written")] == [0]
