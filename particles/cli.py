@@ -91,7 +91,8 @@ def _grade(args):
             args.submissions, args.out, jobs=args.jobs, exercise=args.exercise, public_only=args.public,
             seed=args.seed, time_limit=args.time_limit, memory_mb=args.memory_mb, root=_root(args),
             private=args.private, hidden_visibility=args.hidden_visibility, gradescope=args.gradescope,
-            progress=progress, isolation=args.isolation, resume=args.resume,
+            progress=progress, isolation=args.isolation, resume=args.resume, course=args.course,
+            times=args.times, metadata=args.metadata, students=args.student,
         )
     except (ValueError, IsolationUnavailable) as error:
         print(f"particles grade: {error}", file=sys.stderr)
@@ -109,7 +110,7 @@ def _grade(args):
         print()
         print(f"{'student':<24}" + "".join(f"{e:>14}" for e in exercises) + f"{'total':>12}")
         for student, results in sorted(summary["students"].items()):
-            by = {r.exercise: (r.score, r.max_score) for r in results}
+            by = {r.exercise: (r.total, r.total_max) for r in results}  # tests + written - late penalty
             cells = "".join(f"{(f'{by[e][0]:g}/{by[e][1]:g}' if e in by else '-'):>14}" for e in exercises)
             total = sum(s for s, _ in by.values()), sum(m for _, m in by.values())
             print(f"{student:<24}{cells}{f'{total[0]:g}/{total[1]:g}':>12}")
@@ -229,6 +230,15 @@ def build_parser():
                             "without the namespace sandbox")
     grade.add_argument("--resume", action="store_true",
                        help="keep the records in OUT/records of unchanged notebooks and grade only the rest")
+    grade.add_argument("--course", metavar="FILE",
+                       help="deadlines and late policy (TOML; default: course.toml in the course folder, if any)")
+    grade.add_argument("--times", metavar="FILE",
+                       help="submission times, a CSV student,exercise,submitted (default: the notebooks' file times)")
+    grade.add_argument("--metadata", metavar="FILE",
+                       help="Gradescope's submission_metadata.json: its created_at is the submission time")
+    grade.add_argument("--student", action="append", metavar="ID",
+                       help="regrade only this student (repeatable); needs --out with the records of an earlier "
+                            "run, keeps the others' and rewrites the gradebook")
     grade.set_defaults(run=_grade)
 
     new = sub.add_parser("new-exercise", help="write a template master and test module for a new exercise NN_topic",

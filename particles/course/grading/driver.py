@@ -31,6 +31,13 @@ What the driver does against a submission that gets out of its worker:
   (``DIR/records/``), so a run that is stopped anyway keeps them and
   ``--resume`` grades only the rest (:mod:`particles.course.results.store`).
 
+Each record says which version of the tests graded it (``tests_version``,
+:mod:`particles.course.grading.versions`: ``--resume`` grades again what a
+changed test affects) and, when the course file gives its exercise a deadline,
+the late-work decision (``late``, :mod:`particles.course.grading.deadlines`).
+``--student ID`` regrades one student's notebooks, keeps every other record of
+``DIR/records/`` as it is and writes the gradebook and the outputs from all.
+
 Which notebooks are graded, and as which student and exercise, is decided in
 :mod:`particles.course.grading.discovery`.
 """
@@ -59,6 +66,8 @@ from ..results.reports import feedback_html, feedback_markdown, gradescope_resul
 from ..walls.limits import check_limit
 from ..results.signing import TOKEN_FD, read_records, sign_records
 from ..results.store import RecordStore
+from .deadlines import SubmissionTimes, apply_late, find_course
+from .versions import library_digest, tests_version
 
 __all__ = ["Unit", "find_submissions", "grade_batch", "grade_unit", "grade", "catalog", "read_records",
            "sign_records", "TOKEN_FD", "written_answers", "LibraryChanged"]
@@ -126,7 +135,7 @@ def catalog(root, exercise, public_only=False, python=None):
             raise RuntimeError(f"cannot collect the tests of {test_file}; run pytest on it to see why") from None
 
 
-def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None):
+def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None, version=""):
     """The :class:`SubmissionRecord` of `unit` from its session's record `data` (None: the session gave none)."""
     session = data if data is not None else SessionRecord(id="", seed=seed)
     records = list(session.tests)
@@ -153,7 +162,8 @@ def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None):
         student=unit.student, exercise=unit.exercise, notebook=str(unit.notebook), seed=seed,
         seconds=round(session.seconds if session.complete else seconds, 2), tests=records, notes=notes,
         written_answers=written, grader_status=status, complete=session.complete, isolation=layers,
-        sandbox=isolation_module.describe(layers), notebook_sha256=notebook_digest(unit.notebook))
+        sandbox=isolation_module.describe(layers), notebook_sha256=notebook_digest(unit.notebook),
+        tests_version=version)
 
 
 def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, memory_mb=None, private=(),
@@ -209,6 +219,7 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
     memory_mb = None if memory_mb is None else check_limit("memory_mb", memory_mb)
     seeds = [secrets.randbelow(2**31) for _ in units] if seeds is None else [int(s) for s in seeds]
     test_file = exercise_tests(root)[units[0].exercise]
+    version = tests_version(root, units[0].exercise)  # before the session reads them
     timeout = timeout or 300 + 120 * len(units)
     token = secrets.token_bytes(32)  # this session's signing key, never written to a file or an environment
     start = time.perf_counter()
@@ -265,7 +276,7 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
             tests = catalog(root, units[0].exercise, public_only, python)
         except RuntimeError:
             tests = []
-    return [_result(u, seed, data.get(str(k)), status, tests, elapsed / len(units), trouble, root)
+    return [_result(u, seed, data.get(str(k)), status, tests, elapsed / len(units), trouble, root, version)
             for k, (u, seed) in enumerate(zip(units, seeds))]
 
 
@@ -290,7 +301,8 @@ def _batches(units, jobs, largest=20):
 
 def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=None, time_limit=None,
           memory_mb=None, root=None, private=(), hidden_visibility="after_published", python=None,
-          gradescope=None, progress=None, isolation="auto", resume=False, audit_hook=True):
+          gradescope=None, progress=None, isolation="auto", resume=False, audit_hook=True, course=None,
+          times=None, metadata=None, students=None):
     """Grade submissions; write results.json and feedback per student and a gradebook.
 
     Parameters
@@ -333,10 +345,22 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         sandbox (see :mod:`particles.course.walls.isolation`).
     resume : bool
         Keep the records already in ``out/records/`` of notebooks that have
-        not changed since (same bytes, same options) and grade only the rest.
+        not changed since (same bytes, same options, same tests version) and
+        grade only the rest.
     audit_hook : bool
         False leaves the workers with the operating system's walls only (see
         :func:`grade_batch`); for tests of those walls, never for grading.
+    course : path, optional
+        The course file of deadlines and late policies (default: ``course.toml`` at `root`, when there
+        is one; see :mod:`particles.course.grading.deadlines`).
+    times : path, optional
+        A CSV ``student,exercise,submitted`` of submission times (default: the notebooks' file times).
+    metadata : path, optional
+        Gradescope's ``submission_metadata.json``: its ``created_at`` is the time of every notebook.
+    students : sequence of str, optional
+        Regrade only these students' notebooks (needs `out` with the records of an earlier run): every
+        other record in ``out/records/`` is kept as it is, and the gradebook and every student's
+        outputs are written again from all the records.
 
     Returns
     -------
@@ -351,7 +375,9 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     ValueError
         On bad arguments (no exercise tests found, unknown exercise, jobs < 1,
         a `time_limit` or `memory_mb` that is not a finite number > 0, an
-        unknown isolation mode, `resume` without `out`).
+        unknown isolation mode, `resume` without `out`, a bad course, times
+        or metadata file, `students` without the records of an earlier run
+        in `out` or with an unknown student).
     particles.course.walls.isolation.IsolationUnavailable
         When `isolation` is ``strict`` and the namespace sandbox cannot start.
     LibraryChanged
@@ -368,6 +394,13 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         raise ValueError(f"jobs must be a positive integer, got {jobs!r}")
     if resume and out is None:
         raise ValueError("resume needs out: the folder whose records/ an earlier run wrote")
+    students = None if students is None else list(dict.fromkeys(students))
+    if students is not None and (out is None or resume):
+        raise ValueError("student needs out (the folder whose records/ an earlier run wrote) and no resume")
+    deadlines = find_course(root, list(tests), course)
+    submitted = SubmissionTimes(metadata, times)
+    library = library_digest()
+    versions = {name: tests_version(root, name, library) for name in tests}
     time_limit = None if time_limit is None else check_limit("time_limit", time_limit)
     memory_mb = None if memory_mb is None else check_limit("memory_mb", memory_mb)
     # ValueError or IsolationUnavailable before anything is graded (a Plan itself: for tests and benchmarks)
@@ -375,6 +408,9 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     isolation_module.protect_this_process()
     before = isolation_module.library_checksum()  # everything the driver needs is imported by now
     units, problems = find_submissions(paths, list(tests), exercise)
+    others = {}
+    if students is not None:
+        units, others = _regraded(units, students, Path(out) / "records")
     if out is not None:
         out = Path(out)
         (out / "logs").mkdir(parents=True, exist_ok=True)
@@ -385,18 +421,28 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     options = {"public_only": bool(public_only), "seed": seed, "time_limit": time_limit, "memory_mb": memory_mb,
                "audit_hook": bool(audit_hook)}
     store = RecordStore(out / "records", options) if out is not None else None
-    done = {}
+    done = dict(others)
+    by_key = {(u.student, u.exercise): u for u in units}
+
+    def late(result):  # the late-work decision, from the course file and the submission's time
+        when, source = submitted.of(by_key[(result.student, result.exercise)])
+        return apply_late(result, deadlines, when, source, submitted.aliases())
+
     if resume:
         for unit in units:
-            kept = store.load(unit)
+            kept = store.load(unit, versions[unit.exercise])
             if kept is not None:
-                done[(unit.student, unit.exercise)] = kept
+                before = kept.late
+                done[(unit.student, unit.exercise)] = late(kept)
+                if kept.late != before:  # a new deadline or extension: the same grade, a new decision
+                    store.save(kept)
     todo = [u for u in units if (u.student, u.exercise) not in done]
     lock = threading.Lock()
 
     def finished(results):
         with lock:
             for result in results:
+                late(result)
                 done[(result.student, result.exercise)] = result
                 if store is not None:
                     store.save(result)
@@ -427,12 +473,12 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     with ThreadPoolExecutor(max_workers=jobs) as pool:
         list(pool.map(work, batches))
     results = [done[(u.student, u.exercise)] for u in units]
-    students = {}
+    graded = {}
     for result in results:
-        students.setdefault(result.student, []).append(result)
+        graded.setdefault(result.student, []).append(result)
     exercises = [name for name in tests if any(u.exercise == name for u in units)]
     layers = [r.isolation for r in results if r.isolation]
-    summary = {"students": students, "exercises": exercises, "problems": problems,
+    summary = {"students": graded, "exercises": exercises, "problems": problems,
                "isolation": isolation_module.describe(layers[0] if layers else {}) if results else
                f"planned: {plan.to_option()}", "resumed": len(units) - len(todo)}
     changed = isolation_module.library_changes(before)
@@ -459,6 +505,21 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     if changed:
         raise LibraryChanged(changed, summary)
     return summary
+
+
+def _regraded(units, students, folder):
+    """The units of `students` and the records of an earlier run to keep as they are (``--student``)."""
+    earlier = RecordStore(folder, {}).load_all() if Path(folder).is_dir() else {}
+    if not earlier:
+        raise ValueError(f"student needs the records of an earlier run; {folder} holds none")
+    known = sorted({u.student for u in units} | {student for student, _ in earlier})
+    unknown = [s for s in students if s not in {u.student for u in units}]
+    if unknown:
+        raise ValueError(f"unknown student {unknown[0]!r}: no notebook of theirs in the submissions; "
+                         f"the students are {', '.join(known)}")
+    units = [u for u in units if u.student in students]
+    regraded = {(u.student, u.exercise) for u in units}
+    return units, {key: record for key, record in earlier.items() if key not in regraded}
 
 
 _written = {}  # (folder, hidden_visibility) -> digest of the results its files were last written from

@@ -41,10 +41,15 @@ def _cell(text):
     return str(text).replace("|", "\\|").replace("\n", " ")
 
 
+def _totals(results):
+    """(total, total_max) of a student's records: tests, written answers, late penalties."""
+    return sum(r.total for r in results), sum(r.total_max for r in results)
+
+
 def feedback_markdown(student, results):
-    """Per-student feedback in Markdown: scores, a table of tests, reasons, how to reproduce."""
+    """Per-student feedback in Markdown: scores, a table of tests, reasons, late work, how to reproduce."""
     results = _records(results)
-    score, top = score_of(t for r in results for t in r.tests)
+    score, top = _totals(results)
     out = [f"# Feedback for {student}", "", f"**Total: {_fmt(score)} / {_fmt(top)} points**", ""]
     if any(t.figures for r in results for t in r.tests):
         out += ["Figures of your curves beside the reference's are in `feedback.html`, beside this file.", ""]
@@ -62,6 +67,7 @@ def feedback_markdown(student, results):
         out += [f"- {note}" for note in result.notes]
         if result.seed is not None and any(t.hidden for t in result.tests):
             out.append(f"- Hidden tests drew their random parameters with seed {result.seed}.")
+        out += [f"- {line}" for line in result.late_lines()]
         out.append("")
     return "\n".join(out).rstrip("\n") + "\n"
 
@@ -123,7 +129,7 @@ def feedback_html(student, results):
     """
     e = html.escape
     results = _records(results)
-    score, top = score_of(t for r in results for t in r.tests)
+    score, top = _totals(results)
     out = ['<!DOCTYPE html>', '<html lang="en">', "<head>", '<meta charset="utf-8">',
            '<meta http-equiv="Content-Security-Policy" content="default-src \'none\'; img-src data:; '
            'style-src \'unsafe-inline\'">',
@@ -149,6 +155,7 @@ def feedback_html(student, results):
         notes = [e(n) for n in result.notes]
         if result.seed is not None and any(t.hidden for t in result.tests):
             notes.append(f"Hidden tests drew their random parameters with seed {e(str(result.seed))}.")
+        notes += [e(line) for line in result.late_lines()]
         if notes:
             out.append('<ul class="notes">' + "".join(f"<li>{n}</li>" for n in notes) + "</ul>")
         out.append("</section>")
