@@ -432,9 +432,9 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         for unit in units:
             kept = store.load(unit, versions[unit.exercise])
             if kept is not None:
-                before = kept.late
+                decided = kept.late
                 done[(unit.student, unit.exercise)] = late(kept)
-                if kept.late != before:  # a new deadline or extension: the same grade, a new decision
+                if kept.late != decided:  # a new deadline or extension: the same grade, a new decision
                     store.save(kept)
     todo = [u for u in units if (u.student, u.exercise) not in done]
     lock = threading.Lock()
