@@ -84,7 +84,7 @@ def _grade(args):
     from .course.walls.isolation import IsolationUnavailable
     def progress(result):
         print(f"  graded {result.student:<24} {result.exercise:<16} {result.score:>5g} / {result.max_score:<5g}"
-              f" ({result.seconds:.1f} s)", flush=True)
+              f" ({result.seconds:.1f} s)" + (f", late: -{result.penalty:g}" if result.penalty else ""), flush=True)
 
     try:
         summary = grade(
@@ -103,6 +103,8 @@ def _grade(args):
     print(f"sandbox: {summary['isolation']}")
     if summary.get("resumed"):
         print(f"resumed: {summary['resumed']} record(s) kept from the earlier run")
+    if args.student:
+        print(f"regraded: {', '.join(args.student)}; kept {summary.get('kept', 0)} record(s) of the others as they were")
     for problem in summary["problems"]:
         print(f"not graded: {problem}", file=sys.stderr)
     exercises = summary["exercises"]
@@ -147,6 +149,8 @@ def _new_exercise(args):
         print(f"wrote {path.relative_to(root)}")
     print(f"next: edit both, run `particles release`, then `pytest {written[1].relative_to(root)}` "
           "(the master must score full marks)")
+    if (Path(root) / "course.toml").exists():
+        print(f"deadline: add [exercises.{args.name}] with its deadline to course.toml (else it has none)")
     return 0
 
 

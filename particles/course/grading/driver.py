@@ -368,7 +368,8 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         ``students`` (student -> list of per-exercise results), ``exercises``
         (names graded, in order), ``problems`` (notebooks not graded),
         ``isolation`` (one line: the walls the workers had), ``resumed``
-        (how many records were kept from an earlier run).
+        (how many records were kept from an earlier run), ``kept`` (how
+        many records of other students `students` kept as they were).
 
     Raises
     ------
@@ -480,7 +481,7 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     layers = [r.isolation for r in results if r.isolation]
     summary = {"students": graded, "exercises": exercises, "problems": problems,
                "isolation": isolation_module.describe(layers[0] if layers else {}) if results else
-               f"planned: {plan.to_option()}", "resumed": len(units) - len(todo)}
+               f"planned: {plan.to_option()}", "resumed": len(units) - len(todo), "kept": len(others)}
     changed = isolation_module.library_changes(before)
     if out is not None:
         _write_outputs(out, done, tests, hidden_visibility)

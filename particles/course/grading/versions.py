@@ -21,8 +21,6 @@ import ast
 import hashlib
 from pathlib import Path
 
-import particles
-
 __all__ = ["tests_version", "tests_files", "library_digest"]
 
 _DIGITS = 12
@@ -92,16 +90,30 @@ def library_digest(package=None):
     Parameters
     ----------
     package : path, optional
-        The package folder (default: the installed ``particles``).
+        The package folder (default: the ``particles`` this module belongs to); the version is the
+        ``__version__`` its ``__init__.py`` assigns ("unknown" when none).
     """
-    package = Path(package) if package is not None else Path(particles.__file__).resolve().parent
+    package = Path(package) if package is not None else Path(__file__).resolve().parents[2]
     digest = hashlib.sha256()
     for path in sorted(package.rglob("*")):
         if "__pycache__" in path.parts or path.suffix == ".pyc" or not path.is_file():
             continue
         digest.update(str(path.relative_to(package)).encode() + b"\0")
         digest.update(hashlib.sha256(path.read_bytes()).digest())
-    return f"{particles.__version__}+{digest.hexdigest()[:_DIGITS]}"
+    return f"{_version(package)}+{digest.hexdigest()[:_DIGITS]}"
+
+
+def _version(package):
+    """``__version__`` as the package's ``__init__.py`` assigns it ("unknown" when it does not)."""
+    try:
+        tree = ast.parse((package / "__init__.py").read_bytes())
+    except (OSError, SyntaxError, ValueError):
+        return "unknown"
+    for node in tree.body:
+        if (isinstance(node, ast.Assign) and any(getattr(t, "id", None) == "__version__" for t in node.targets)
+                and isinstance(node.value, ast.Constant)):
+            return str(node.value.value)
+    return "unknown"
 
 
 def tests_version(root, exercise, library=None):

@@ -53,7 +53,7 @@ def test_the_library_digest_follows_its_sources_not_its_bytecode(tmp_path):
     package = tmp_path / "particles"
     shutil.copytree(ROOT / "particles" / "course" / "results", package, ignore=shutil.ignore_patterns("__pycache__"))
     first = library_digest(package)
-    assert first.startswith("0.") and "+" in first
+    assert first.startswith("unknown+")  # that copy has no __init__.py assigning __version__
     (package / "__pycache__").mkdir()
     (package / "__pycache__" / "records.cpython-311.pyc").write_bytes(b"x")
     assert library_digest(package) == first
