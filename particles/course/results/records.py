@@ -308,7 +308,9 @@ class SubmissionRecord(_HoldsTests):
         ``comment`` (str), ``rubric`` (which rubric file and version).
     late : dict or None
         The late-work decision, None when no deadline applies: ``submitted`` and ``deadline`` (ISO 8601),
-        ``days_late`` (int), ``penalty`` (points taken off the total) and ``reason`` (one sentence).
+        ``days_late`` (int), ``penalty`` (points taken off the total) and ``reason`` (one sentence); also
+        ``fraction`` (of the points) and ``source`` (where the submission time came from), see
+        :func:`particles.course.grading.deadlines.decide`.
     tests_version : str
         Digest of the exercise's tests that graded this record (a changed test regrades what it affects).
 
