@@ -104,7 +104,8 @@ def _grade(args):
     if summary.get("resumed"):
         print(f"resumed: {summary['resumed']} record(s) kept from the earlier run")
     if args.student:
-        print(f"regraded: {', '.join(args.student)}; kept {summary.get('kept', 0)} record(s) of the others as they were")
+        print(f"regraded: {', '.join(args.student)}; "
+              f"kept {summary.get('kept', 0)} record(s) of the others as they were")
     for problem in summary["problems"]:
         print(f"not graded: {problem}", file=sys.stderr)
     exercises = summary["exercises"]

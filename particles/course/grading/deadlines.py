@@ -304,8 +304,12 @@ def decide(submitted, deadline, policy, total_max, why="", source=""):
     --------
     >>> from datetime import datetime, timedelta, timezone
     >>> due = datetime(2026, 10, 1, 23, 59, tzinfo=timezone(timedelta(hours=1)))
-    >>> decide(due + timedelta(days=1, hours=3), due, LatePolicy(0.1, 0.5), 30)["reason"]
-    'submitted 1 day 3 hours after the deadline 2026-10-01 23:59 +01:00: -20% of 30 points = -6 points (2 days late at 10% a day, cap 50%)'
+    >>> late = decide(due + timedelta(days=1, hours=3), due, LatePolicy(0.1, 0.5), 30)
+    >>> late["days_late"], late["penalty"]
+    (2, 6.0)
+    >>> print(late["reason"])  # doctest: +NORMALIZE_WHITESPACE
+    submitted 1 day 3 hours after the deadline 2026-10-01 23:59 +01:00: -20% of 30 points = -6 points
+    (2 days late at 10% a day, cap 50%)
     """
     submitted, deadline = parse_time(submitted, "submitted"), parse_time(deadline, "deadline")
     shown = submitted.astimezone(deadline.tzinfo)

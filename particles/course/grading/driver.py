@@ -65,7 +65,7 @@ from ..results.records import SessionRecord, SubmissionRecord, TestRecord
 from ..results.reports import feedback_html, feedback_markdown, gradescope_results, write_gradebook, write_json
 from ..walls.limits import check_limit
 from ..results.signing import TOKEN_FD, read_records, sign_records
-from ..results.store import RecordStore
+from ..results.store import RecordStore, regrade_split
 from .deadlines import SubmissionTimes, apply_late, find_course
 from .versions import library_digest, tests_version
 
@@ -411,7 +411,7 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     units, problems = find_submissions(paths, list(tests), exercise)
     others = {}
     if students is not None:
-        units, others = _regraded(units, students, Path(out) / "records")
+        units, others = regrade_split(Path(out) / "records", units, students)
     if out is not None:
         out = Path(out)
         (out / "logs").mkdir(parents=True, exist_ok=True)
@@ -507,20 +507,6 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         raise LibraryChanged(changed, summary)
     return summary
 
-
-def _regraded(units, students, folder):
-    """The units of `students` and the records of an earlier run to keep as they are (``--student``)."""
-    earlier = RecordStore(folder, {}).load_all() if Path(folder).is_dir() else {}
-    if not earlier:
-        raise ValueError(f"student needs the records of an earlier run; {folder} holds none")
-    known = sorted({u.student for u in units} | {student for student, _ in earlier})
-    unknown = [s for s in students if s not in {u.student for u in units}]
-    if unknown:
-        raise ValueError(f"unknown student {unknown[0]!r}: no notebook of theirs in the submissions; "
-                         f"the students are {', '.join(known)}")
-    units = [u for u in units if u.student in students]
-    regraded = {(u.student, u.exercise) for u in units}
-    return units, {key: record for key, record in earlier.items() if key not in regraded}
 
 
 _written = {}  # (folder, hidden_visibility) -> digest of the results its files were last written from

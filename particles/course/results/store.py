@@ -19,7 +19,7 @@ from pathlib import Path
 from ..grading.discovery import notebook_digest
 from .records import SubmissionRecord
 
-__all__ = ["RecordStore"]
+__all__ = ["RecordStore", "regrade_split"]
 
 
 class RecordStore:
@@ -107,3 +107,43 @@ class RecordStore:
                 raise ValueError(f"cannot read the record {path}: {error}") from None
             records[(record.student, record.exercise)] = record
         return records
+
+
+def regrade_split(folder, units, students):
+    """What ``particles grade --student`` grades and keeps: the students' units, and every other record.
+
+    Parameters
+    ----------
+    folder : path
+        The ``records/`` folder of an earlier run.
+    units : list of Unit
+        The notebooks found in the submissions.
+    students : sequence of str
+        The students to grade again.
+
+    Returns
+    -------
+    units : list of Unit
+        Those of `students`.
+    others : dict
+        (student, exercise) -> record, every record of `folder` but those the units grade again (kept
+        as they are; their files are not written).
+
+    Raises
+    ------
+    ValueError
+        When `folder` holds no record, or a student has no notebook in the submissions (naming the
+        students there are).
+    """
+    earlier = RecordStore(folder, {}).load_all() if Path(folder).is_dir() else {}
+    if not earlier:
+        raise ValueError(f"student needs the records of an earlier run; {folder} holds none")
+    found = {u.student for u in units}
+    unknown = [s for s in students if s not in found]
+    if unknown:
+        known = sorted(found | {student for student, _ in earlier})
+        raise ValueError(f"unknown student {unknown[0]!r}: no notebook of theirs in the submissions; "
+                         f"the students are {', '.join(known)}")
+    units = [u for u in units if u.student in students]
+    regraded = {(u.student, u.exercise) for u in units}
+    return units, {key: record for key, record in earlier.items() if key not in regraded}

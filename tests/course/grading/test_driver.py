@@ -186,8 +186,10 @@ def test_late_work_is_penalized_and_one_student_is_regraded_alone(tmp_path):
     assert "alice,11,11,11" in (out / "gradebook.csv").read_text()
     assert "bob,9.9,9.9,11" in (out / "gradebook.csv").read_text()
     feedback = (out / "bob" / "feedback.md").read_text()
-    assert "**Total: 9.9 / 11 points**" in feedback and "Late: raw score 11, penalty -1.1 (submitted 10 hours" in feedback
-    assert "Graded by tests version tests=" in feedback and "Graded by tests version" in (out / "bob" / "feedback.html").read_text()
+    assert "**Total: 9.9 / 11 points**" in feedback
+    assert "Late: raw score 11, penalty -1.1 (submitted 10 hours" in feedback
+    assert "Graded by tests version tests=" in feedback
+    assert "Graded by tests version" in (out / "bob" / "feedback.html").read_text()
     results = json.loads((out / "bob" / "results.json").read_text())
     assert results["score"] == 9.9 and results["extra_data"]["late"]["00_warmup"]["penalty"] == 1.1
     assert "Late: raw score 11" in results["output"]

@@ -6,7 +6,7 @@ import pytest
 
 from particles.course.grading.discovery import Unit, notebook_digest
 from particles.course.results.records import SubmissionRecord, TestRecord
-from particles.course.results.store import RecordStore
+from particles.course.results.store import RecordStore, regrade_split
 
 OPTIONS = {"public_only": False, "seed": 3}
 
@@ -54,3 +54,16 @@ def test_load_all_reads_every_record_whatever_its_options_and_names_a_broken_one
     store.path("carol", "00_warmup").write_text("{not json")
     with pytest.raises(ValueError, match="cannot read the record .*carol__00_warmup.json"):
         store.load_all()
+
+
+def test_regrade_split_keeps_the_others_and_names_the_students(tmp_path):
+    """--student: the student's units are graded again, every other record is kept; unknown names are listed."""
+    store, alice_unit, _ = _saved(tmp_path, "alice")
+    _, bob_unit, bob = _saved(tmp_path, "bob")
+    units, others = regrade_split(tmp_path / "records", [alice_unit, bob_unit], ["alice"])
+    assert units == [alice_unit] and others == {("bob", "00_warmup"): bob}
+    with pytest.raises(ValueError, match="unknown student 'carol'.*the students are alice, bob"):
+        regrade_split(tmp_path / "records", [alice_unit, bob_unit], ["carol"])
+    with pytest.raises(ValueError, match="holds none"):
+        regrade_split(tmp_path / "nothing", [alice_unit], ["alice"])
+    assert not (tmp_path / "nothing").exists()  # asking made no folder
