@@ -84,14 +84,15 @@ def _grade(args):
     from .course.walls.isolation import IsolationUnavailable
     def progress(result):
         print(f"  graded {result.student:<24} {result.exercise:<16} {result.score:>5g} / {result.max_score:<5g}"
-              f" ({result.seconds:.1f} s)", flush=True)
+              f" ({result.seconds:.1f} s)" + (f", late: -{result.penalty:g}" if result.penalty else ""), flush=True)
 
     try:
         summary = grade(
             args.submissions, args.out, jobs=args.jobs, exercise=args.exercise, public_only=args.public,
             seed=args.seed, time_limit=args.time_limit, memory_mb=args.memory_mb, root=_root(args),
             private=args.private, hidden_visibility=args.hidden_visibility, gradescope=args.gradescope,
-            progress=progress, isolation=args.isolation, resume=args.resume, rubric=args.rubric,
+            progress=progress, isolation=args.isolation, resume=args.resume, rubric=args.rubric, course=args.course,
+            times=args.times, metadata=args.metadata, students=args.student,
         )
     except (ValueError, IsolationUnavailable) as error:
         print(f"particles grade: {error}", file=sys.stderr)
@@ -102,6 +103,9 @@ def _grade(args):
     print(f"sandbox: {summary['isolation']}")
     if summary.get("resumed"):
         print(f"resumed: {summary['resumed']} record(s) kept from the earlier run")
+    if args.student:
+        print(f"regraded: {', '.join(args.student)}; "
+              f"kept {summary.get('kept', 0)} record(s) of the others as they were")
     for problem in summary["problems"]:
         print(f"not graded: {problem}", file=sys.stderr)
     exercises = summary["exercises"]
@@ -109,7 +113,7 @@ def _grade(args):
         print()
         print(f"{'student':<24}" + "".join(f"{e:>14}" for e in exercises) + f"{'total':>12}")
         for student, results in sorted(summary["students"].items()):
-            by = {r.exercise: (r.score, r.max_score) for r in results}
+            by = {r.exercise: (r.total, r.total_max) for r in results}  # tests + written - late penalty
             cells = "".join(f"{(f'{by[e][0]:g}/{by[e][1]:g}' if e in by else '-'):>14}" for e in exercises)
             total = sum(s for s, _ in by.values()), sum(m for _, m in by.values())
             print(f"{student:<24}{cells}{f'{total[0]:g}/{total[1]:g}':>12}")
@@ -207,6 +211,8 @@ def _new_exercise(args):
         print(f"wrote {path.relative_to(root)}")
     print(f"next: edit both, run `particles release`, then `pytest {written[1].relative_to(root)}` "
           "(the master must score full marks)")
+    if (Path(root) / "course.toml").exists():
+        print(f"deadline: add [exercises.{args.name}] with its deadline to course.toml (else it has none)")
     return 0
 
 
@@ -293,6 +299,15 @@ def build_parser():
     grade.add_argument("--rubric", action="append", default=[], metavar="FILE",
                        help="a rubric of the written answers (CSV, as `particles review` writes it) or a folder "
                             "of them, merged into the records; repeatable; checked before grading (exit 2)")
+    grade.add_argument("--course", metavar="FILE",
+                       help="deadlines and late policy (TOML; default: course.toml in the course folder, if any)")
+    grade.add_argument("--times", metavar="FILE",
+                       help="submission times, a CSV student,exercise,submitted (default: the notebooks' file times)")
+    grade.add_argument("--metadata", metavar="FILE",
+                       help="Gradescope's submission_metadata.json: its created_at is the submission time")
+    grade.add_argument("--student", action="append", metavar="ID",
+                       help="regrade only this student (repeatable); needs --out with the records of an earlier "
+                            "run, keeps the others' and rewrites the gradebook")
     grade.set_defaults(run=_grade)
 
     review = sub.add_parser("review", help="write one page per written question with every student's answer, "

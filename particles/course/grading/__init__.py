@@ -14,4 +14,8 @@ Modules:
   helper of it;
 * :mod:`~particles.course.grading.figures`: figures in the feedback: the student's curve beside the
   reference's.
+* :mod:`~particles.course.grading.deadlines`: the course file (``course.toml``): deadlines, the late
+  policy, extensions; submission times; the late penalty of a record;
+* :mod:`~particles.course.grading.versions`: which version of the tests graded a record (a digest of
+  the exercise's tests and the library).
 """

@@ -31,6 +31,13 @@ What the driver does against a submission that gets out of its worker:
   (``DIR/records/``), so a run that is stopped anyway keeps them and
   ``--resume`` grades only the rest (:mod:`particles.course.results.store`).
 
+Each record says which version of the tests graded it (``tests_version``,
+:mod:`particles.course.grading.versions`: ``--resume`` grades again what a
+changed test affects) and, when the course file gives its exercise a deadline,
+the late-work decision (``late``, :mod:`particles.course.grading.deadlines`).
+``--student ID`` regrades one student's notebooks, keeps every other record of
+``DIR/records/`` as it is and writes the gradebook and the outputs from all.
+
 Which notebooks are graded, and as which student and exercise, is decided in
 :mod:`particles.course.grading.discovery`.
 """
@@ -60,6 +67,9 @@ from ..walls.limits import check_limit
 from ..results.signing import TOKEN_FD, read_records, sign_records
 from ..results.store import RecordStore
 from ..results.rubric import WrittenGrades
+from ..results.store import RecordStore, regrade_split
+from .deadlines import SubmissionTimes, apply_late, find_course
+from .versions import library_digest, tests_version
 
 __all__ = ["Unit", "find_submissions", "grade_batch", "grade_unit", "grade", "catalog", "read_records",
            "sign_records", "TOKEN_FD", "written_answers", "LibraryChanged"]
@@ -127,7 +137,7 @@ def catalog(root, exercise, public_only=False, python=None):
             raise RuntimeError(f"cannot collect the tests of {test_file}; run pytest on it to see why") from None
 
 
-def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None):
+def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None, version=""):
     """The :class:`SubmissionRecord` of `unit` from its session's record `data` (None: the session gave none)."""
     session = data if data is not None else SessionRecord(id="", seed=seed)
     records = list(session.tests)
@@ -154,7 +164,8 @@ def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None):
         student=unit.student, exercise=unit.exercise, notebook=str(unit.notebook), seed=seed,
         seconds=round(session.seconds if session.complete else seconds, 2), tests=records, notes=notes,
         written_answers=written, grader_status=status, complete=session.complete, isolation=layers,
-        sandbox=isolation_module.describe(layers), notebook_sha256=notebook_digest(unit.notebook))
+        sandbox=isolation_module.describe(layers), notebook_sha256=notebook_digest(unit.notebook),
+        tests_version=version)
 
 
 def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, memory_mb=None, private=(),
@@ -210,6 +221,7 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
     memory_mb = None if memory_mb is None else check_limit("memory_mb", memory_mb)
     seeds = [secrets.randbelow(2**31) for _ in units] if seeds is None else [int(s) for s in seeds]
     test_file = exercise_tests(root)[units[0].exercise]
+    version = tests_version(root, units[0].exercise)  # before the session reads them
     timeout = timeout or 300 + 120 * len(units)
     token = secrets.token_bytes(32)  # this session's signing key, never written to a file or an environment
     start = time.perf_counter()
@@ -266,7 +278,7 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
             tests = catalog(root, units[0].exercise, public_only, python)
         except RuntimeError:
             tests = []
-    return [_result(u, seed, data.get(str(k)), status, tests, elapsed / len(units), trouble, root)
+    return [_result(u, seed, data.get(str(k)), status, tests, elapsed / len(units), trouble, root, version)
             for k, (u, seed) in enumerate(zip(units, seeds))]
 
 
@@ -291,7 +303,8 @@ def _batches(units, jobs, largest=20):
 
 def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=None, time_limit=None,
           memory_mb=None, root=None, private=(), hidden_visibility="after_published", python=None,
-          gradescope=None, progress=None, isolation="auto", resume=False, audit_hook=True, rubric=()):
+          gradescope=None, progress=None, isolation="auto", resume=False, audit_hook=True, rubric=(),
+          course=None, times=None, metadata=None, students=None):
     """Grade submissions; write results.json and feedback per student and a gradebook.
 
     Parameters
@@ -334,7 +347,8 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         sandbox (see :mod:`particles.course.walls.isolation`).
     resume : bool
         Keep the records already in ``out/records/`` of notebooks that have
-        not changed since (same bytes, same options) and grade only the rest.
+        not changed since (same bytes, same options, same tests version) and
+        grade only the rest.
     audit_hook : bool
         False leaves the workers with the operating system's walls only (see
         :func:`grade_batch`); for tests of those walls, never for grading.
@@ -342,6 +356,17 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         Rubric files (or folders of them) of the written answers, checked before anything is graded
         and merged into every record when the outputs are written
         (:mod:`particles.course.results.rubric`).
+    course : path, optional
+        The course file of deadlines and late policies (default: ``course.toml`` at `root`, when there
+        is one; see :mod:`particles.course.grading.deadlines`).
+    times : path, optional
+        A CSV ``student,exercise,submitted`` of submission times (default: the notebooks' file times).
+    metadata : path, optional
+        Gradescope's ``submission_metadata.json``: its ``created_at`` is the time of every notebook.
+    students : sequence of str, optional
+        Regrade only these students' notebooks (needs `out` with the records of an earlier run): every
+        other record in ``out/records/`` is kept as it is, and the gradebook and every student's
+        outputs are written again from all the records.
 
     Returns
     -------
@@ -349,7 +374,8 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         ``students`` (student -> list of per-exercise results), ``exercises``
         (names graded, in order), ``problems`` (notebooks not graded),
         ``isolation`` (one line: the walls the workers had), ``resumed``
-        (how many records were kept from an earlier run).
+        (how many records were kept from an earlier run), ``kept`` (how
+        many records of other students `students` kept as they were).
 
     Raises
     ------
@@ -357,7 +383,8 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         On bad arguments (no exercise tests found, unknown exercise, jobs < 1,
         a `time_limit` or `memory_mb` that is not a finite number > 0, an
         unknown isolation mode, `resume` without `out`, a rubric that does not fit the submissions:
-        :class:`~particles.course.results.rubric.RubricError`).
+        :class:`~particles.course.results.rubric.RubricError`, a bad course, times or metadata file,
+        `students` without the records of an earlier run in `out` or with an unknown student).
     particles.course.walls.isolation.IsolationUnavailable
         When `isolation` is ``strict`` and the namespace sandbox cannot start.
     LibraryChanged
@@ -374,6 +401,13 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         raise ValueError(f"jobs must be a positive integer, got {jobs!r}")
     if resume and out is None:
         raise ValueError("resume needs out: the folder whose records/ an earlier run wrote")
+    students = None if students is None else list(dict.fromkeys(students))
+    if students is not None and (out is None or resume):
+        raise ValueError("student needs out (the folder whose records/ an earlier run wrote) and no resume")
+    deadlines = find_course(root, list(tests), course)
+    submitted = SubmissionTimes(metadata, times)
+    library = library_digest()
+    versions = {name: tests_version(root, name, library) for name in tests}
     time_limit = None if time_limit is None else check_limit("time_limit", time_limit)
     memory_mb = None if memory_mb is None else check_limit("memory_mb", memory_mb)
     # ValueError or IsolationUnavailable before anything is graded (a Plan itself: for tests and benchmarks)
@@ -382,6 +416,9 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     before = isolation_module.library_checksum()  # everything the driver needs is imported by now
     units, problems = find_submissions(paths, list(tests), exercise)
     written = WrittenGrades.load(rubric, units, root, [exercise] if exercise else [])  # a bad rubric: no grading
+    others = {}
+    if students is not None:
+        units, others = regrade_split(Path(out) / "records", units, students)
     if out is not None:
         out = Path(out)
         (out / "logs").mkdir(parents=True, exist_ok=True)
@@ -392,18 +429,28 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     options = {"public_only": bool(public_only), "seed": seed, "time_limit": time_limit, "memory_mb": memory_mb,
                "audit_hook": bool(audit_hook)}
     store = RecordStore(out / "records", options) if out is not None else None
-    done = {}
+    done = dict(others)
+    by_key = {(u.student, u.exercise): u for u in units}
+
+    def late(result):  # the late-work decision, from the course file and the submission's time
+        when, source = submitted.of(by_key[(result.student, result.exercise)])
+        return apply_late(result, deadlines, when, source, submitted.aliases())
+
     if resume:
         for unit in units:
-            kept = store.load(unit)
+            kept = store.load(unit, versions[unit.exercise])
             if kept is not None:
-                done[(unit.student, unit.exercise)] = kept
+                decided = kept.late
+                done[(unit.student, unit.exercise)] = late(kept)
+                if kept.late != decided:  # a new deadline or extension: the same grade, a new decision
+                    store.save(kept)
     todo = [u for u in units if (u.student, u.exercise) not in done]
     lock = threading.Lock()
 
     def finished(results):
         with lock:
             for result in results:
+                late(result)
                 done[(result.student, result.exercise)] = result
                 if store is not None:
                     store.save(result)
@@ -435,14 +482,14 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     with ThreadPoolExecutor(max_workers=jobs) as pool:
         list(pool.map(work, batches))
     results = [done[(u.student, u.exercise)] for u in units]
-    students = {}
+    graded = {}
     for result in results:
-        students.setdefault(result.student, []).append(result)
+        graded.setdefault(result.student, []).append(result)
     exercises = [name for name in tests if any(u.exercise == name for u in units)]
     layers = [r.isolation for r in results if r.isolation]
-    summary = {"students": students, "exercises": exercises, "problems": problems,
+    summary = {"students": graded, "exercises": exercises, "problems": problems,
                "isolation": isolation_module.describe(layers[0] if layers else {}) if results else
-               f"planned: {plan.to_option()}", "resumed": len(units) - len(todo)}
+               f"planned: {plan.to_option()}", "resumed": len(units) - len(todo), "kept": len(others)}
     changed = isolation_module.library_changes(before)
     if out is not None:
         _write_outputs(out, done, tests, hidden_visibility, written=written)
@@ -484,6 +531,9 @@ def _write_outputs(out, done, tests, hidden_visibility, students=None, written=N
     """
     written = written or WrittenGrades()
     written.apply(done.values())
+    for record in done.values():  # a late penalty is a fraction of the points, written grades included
+        if record.late:
+            record.late["penalty"] = record.penalty
     by_student = {}
     for (student, _), result in done.items():
         by_student.setdefault(student, []).append(result)

@@ -19,6 +19,11 @@ that Gradescope adds its points to the autograder's score.
 ``AUTOGRADER_ROOT`` (default ``/autograder``) and ``PARTICLES_PYTHON`` (default
 the virtual environment ``setup.sh`` made). Whatever happens, it leaves a
 ``results.json``: if grading fails outright, one that scores 0 and says so.
+
+Late work: the bundle holds the course file (``course.toml``, deadlines and the
+late policy, :mod:`particles.course.grading.deadlines`) when the course has one,
+and ``run_autograder`` passes Gradescope's ``submission_metadata.json`` (whose
+``created_at`` is the submission's time) to ``particles grade --metadata``.
 """
 
 import shutil
@@ -72,10 +77,15 @@ RESULTS="$ROOT/results/results.json"
 mkdir -p "$ROOT/results"
 rm -f "$RESULTS"
 export PYTHONPATH="$SOURCE${{PYTHONPATH:+:$PYTHONPATH}}"
+# the submission's time, for the deadlines of course.toml (when the bundle has one)
+METADATA=()
+if [ -f "$ROOT/submission_metadata.json" ]; then
+    METADATA=(--metadata "$ROOT/submission_metadata.json")
+fi
 # --isolation auto: the namespace sandbox where the container allows it, else a uid of its own,
 # Landlock and limits; results.json's output says which layers were active
 "$PYTHON" -m particles grade "$ROOT/submission" --root "$SOURCE" --gradescope "$RESULTS" \\
-    --private "$ROOT" --jobs 1 --isolation auto{exercise_arg}
+    --private "$ROOT" --jobs 1 --isolation auto{exercise_arg} ${{METADATA[@]+"${{METADATA[@]}}"}}
 status=$?
 if [ ! -s "$RESULTS" ]; then
     printf '{{"score": 0, "output": "The autograder could not grade this submission (status %s). Please tell the instructors.", "tests": []}}\\n' "$status" > "$RESULTS"
@@ -139,7 +149,7 @@ def write_bundle(root, out, exercise=None):
     if exercise is not None and exercise not in tests:
         raise ValueError(f"unknown exercise {exercise!r}; expected one of {', '.join(map(repr, tests))}")
     files = []
-    for name in ("pyproject.toml", "README.md", "LICENSE"):
+    for name in ("pyproject.toml", "README.md", "LICENSE", "course.toml"):
         if (root / name).exists():
             files.append((root / name, name))
     for path in sorted((root / "particles").rglob("*")):

@@ -308,7 +308,9 @@ class SubmissionRecord(_HoldsTests):
         ``comment`` (str), ``rubric`` (which rubric file and version).
     late : dict or None
         The late-work decision, None when no deadline applies: ``submitted`` and ``deadline`` (ISO 8601),
-        ``days_late`` (int), ``penalty`` (points taken off the total) and ``reason`` (one sentence).
+        ``days_late`` (int), ``penalty`` (points taken off the total) and ``reason`` (one sentence); also
+        ``fraction`` (of the points) and ``source`` (where the submission time came from), see
+        :func:`particles.course.grading.deadlines.decide`.
     tests_version : str
         Digest of the exercise's tests that graded this record (a changed test regrades what it affects).
 
@@ -362,7 +364,11 @@ class SubmissionRecord(_HoldsTests):
     @property
     def penalty(self):
         """Points taken off for late work (0 when on time or no deadline applies)."""
-        return float(self.late["penalty"]) if self.late else 0.0
+        if not self.late:
+            return 0.0
+        if self.late.get("fraction") is not None:  # a fraction of the points there are now (written grades too)
+            return round(float(self.late["fraction"]) * self.total_max, 6)
+        return float(self.late["penalty"])
 
     @property
     def total(self):
@@ -374,12 +380,33 @@ class SubmissionRecord(_HoldsTests):
         """The points the exercise can give: tests and written questions."""
         return self.max_score + self.written_max
 
+    def late_lines(self):
+        """Sentences on the late work and the tests version, for the feedback (plain text).
+
+        The late line gives the raw score, the penalty and why, and the total; the last line says
+        which version of the tests graded the record (:mod:`particles.course.grading.versions`).
+        """
+        lines = []
+        if self.late:
+            if self.penalty:
+                lines.append(f"Late: raw score {self.score + self.written_score:g}, penalty -{self.penalty:g} "
+                             f"of {self.total_max:g} points ({self.late['reason']}); "
+                             f"total {self.total:g} / {self.total_max:g}.")
+            else:
+                lines.append(f"On time: {self.late['reason']}.")
+            if self.late.get("source"):
+                lines[-1] += f" Submission time from {self.late['source']}."
+        if self.tests_version:
+            lines.append(f"Graded by tests version {self.tests_version}.")
+        return lines
+
     def summary_lines(self):
-        """The lines of Gradescope's top output for this exercise: score, notes, sandbox."""
+        """The lines of Gradescope's top output for this exercise: score, notes, sandbox, late work."""
         lines = [f"{self.exercise}: {self.score:g} / {self.max_score:g} points"]
         lines += [f"  {note}" for note in self.notes]
         if self.sandbox:
             lines.append(f"  Sandbox of your code: {self.sandbox}")
+        lines += [f"  {line}" for line in self.late_lines()]
         return lines
 
     def to_gradescope(self, hidden_visibility="after_published"):
@@ -412,7 +439,9 @@ def to_gradescope(student, results, hidden_visibility="after_published"):
     for result in results:
         lines += result.summary_lines()
         tests += result.to_gradescope(hidden_visibility)
-    score, top = score_of(t for r in results for t in r.tests)
+    # the tests' points minus late penalties (and plus written grades, once merged): Gradescope takes this
+    # top-level score over the sum of the tests'
+    score, top = sum(r.total for r in results), sum(r.total_max for r in results)
     return {
         "score": score,
         "max_score": top,
@@ -422,6 +451,8 @@ def to_gradescope(student, results, hidden_visibility="after_published"):
         "visibility": "visible",
         "stdout_visibility": "hidden",
         "extra_data": {"student": student, "seeds": {r.exercise: r.seed for r in results},
-                       "sandbox": {r.exercise: r.isolation for r in results}},
+                       "sandbox": {r.exercise: r.isolation for r in results},
+                       "tests_version": {r.exercise: r.tests_version for r in results},
+                       "late": {r.exercise: r.late for r in results if r.late}},
         "tests": tests,
     }

@@ -83,7 +83,8 @@ def gradescope_results(student, results, hidden_visibility="after_published", ma
     dict
         :func:`~particles.course.results.records.to_gradescope`'s, and one entry per written question
         after each exercise's tests. A question a rubric graded (the record's ``written``) scores its
-        points out of ``max_points``, and the top-level ``score`` and ``max_score`` include them; any
+        points out of ``max_points``, and the top-level ``score`` and ``max_score`` (the records'
+        :attr:`~particles.course.results.records.SubmissionRecord.total`) include them; any
         other written question scores 0 out of 0 and says that it is graded by hand on Gradescope, worth
         its points (a manual question of the assignment's outline).
     """
@@ -102,10 +103,8 @@ def gradescope_results(student, results, hidden_visibility="after_published", ma
             questions, points = {}, manual.get(result.exercise, {})
         tests += [_written_entry(result.exercise, k, top, questions.get(k), k not in blank)
                   for k, top in sorted(points.items())]
-    data["tests"] = tests + rest
+    data["tests"] = tests + rest  # the top-level score is already the records' totals (written grades included)
     if any(r.written for r in results):
-        data["score"] += sum(r.written_score for r in results)
-        data["max_score"] += sum(r.written_max for r in results)
         data["extra_data"]["written"] = {r.exercise: r.written for r in results if r.written}
         data["output"] = "\n".join([data["output"], *(f"{r.exercise}: {_written_summary(r)}" for r in results
                                                       if r.written)]).strip()
@@ -144,7 +143,7 @@ def _written_markdown(result):
 
 
 def feedback_markdown(student, results):
-    """Per-student feedback in Markdown: scores, a table of tests, reasons, how to reproduce."""
+    """Per-student feedback in Markdown: scores, a table of tests, reasons, late work, how to reproduce."""
     results = _records(results)
     score, top = _totals(results)
     out = [f"# Feedback for {student}", "", f"**Total: {_fmt(score)} / {_fmt(top)} points**", ""]
@@ -165,6 +164,7 @@ def feedback_markdown(student, results):
         out += [f"- {note}" for note in result.notes]
         if result.seed is not None and any(t.hidden for t in result.tests):
             out.append(f"- Hidden tests drew their random parameters with seed {result.seed}.")
+        out += [f"- {line}" for line in result.late_lines()]
         out.append("")
     return "\n".join(out).rstrip("\n") + "\n"
 
@@ -268,6 +268,7 @@ def feedback_html(student, results):
         notes = [e(n) for n in result.notes]
         if result.seed is not None and any(t.hidden for t in result.tests):
             notes.append(f"Hidden tests drew their random parameters with seed {e(str(result.seed))}.")
+        notes += [e(line) for line in result.late_lines()]
         if notes:
             out.append('<ul class="notes">' + "".join(f"<li>{n}</li>" for n in notes) + "</ul>")
         out.append("</section>")

@@ -4,8 +4,11 @@ One JSON file per notebook graded, ``DIR/records/<student>__<exercise>.json``,
 written (atomically: a temporary file, then a rename) as soon as the notebook's
 batch is done. A run that is stopped anyway (Ctrl-C, power loss, a killed
 driver) keeps every finished record; a resumed run keeps a record only when it
-is complete, of the same notebook (same bytes: SHA-256) and made with the same
-options (public only, seed, limits), and grades everything else again.
+is complete, of the same notebook (same bytes: SHA-256), made with the same
+options (public only, seed, limits) and graded by the same version of the tests
+(``tests_version``, see :mod:`particles.course.grading.versions`), and grades
+everything else again. ``particles grade --student ID`` reads every record
+(:meth:`RecordStore.load_all`) and keeps the others' files as they are.
 """
 
 import json
@@ -16,7 +19,7 @@ from pathlib import Path
 from ..grading.discovery import notebook_digest
 from .records import SubmissionRecord
 
-__all__ = ["RecordStore"]
+__all__ = ["RecordStore", "regrade_split"]
 
 
 class RecordStore:
@@ -56,8 +59,15 @@ class RecordStore:
             Path(name).unlink(missing_ok=True)
             raise
 
-    def load(self, unit):
-        """The kept record of `unit` (a :class:`~particles.course.grading.discovery.Unit`), or None to grade it again."""
+    def load(self, unit, tests_version=None):
+        """The kept record of `unit` (a :class:`~particles.course.grading.discovery.Unit`), or None to grade it again.
+
+        Parameters
+        ----------
+        unit : Unit
+        tests_version : str, optional
+            The current version of the unit's exercise's tests: a record graded by another is not kept.
+        """
         try:
             data = json.loads(self.path(unit.student, unit.exercise).read_text())
         except (OSError, ValueError):
@@ -67,7 +77,8 @@ class RecordStore:
         same = (data.get("student") == unit.student and data.get("exercise") == unit.exercise
                 and data.get("options") == self.options and data.get("complete") is True
                 and data.get("grader_status") in (0, 1)
-                and data.get("notebook_sha256") == notebook_digest(unit.notebook) != "")
+                and data.get("notebook_sha256") == notebook_digest(unit.notebook) != ""
+                and (tests_version is None or data.get("tests_version") == tests_version))
         if not same:
             return None
         data.pop("options", None)
@@ -77,3 +88,62 @@ class RecordStore:
             return None
         record.notebook, record.resumed = str(unit.notebook), True
         return record
+
+    def load_all(self):
+        """Every record of the folder, as it is (whatever its options): (student, exercise) -> record.
+
+        Raises
+        ------
+        ValueError
+            When a record file cannot be read as a record (naming the file): nothing is silently dropped.
+        """
+        records = {}
+        for path in sorted(self.folder.glob("*.json")):
+            try:
+                data = json.loads(path.read_text())
+                data.pop("options", None)
+                record = SubmissionRecord.from_dict(data)
+            except (OSError, ValueError, TypeError, AttributeError) as error:
+                raise ValueError(f"cannot read the record {path}: {error}") from None
+            records[(record.student, record.exercise)] = record
+        return records
+
+
+def regrade_split(folder, units, students):
+    """What ``particles grade --student`` grades and keeps: the students' units, and every other record.
+
+    Parameters
+    ----------
+    folder : path
+        The ``records/`` folder of an earlier run.
+    units : list of Unit
+        The notebooks found in the submissions.
+    students : sequence of str
+        The students to grade again.
+
+    Returns
+    -------
+    units : list of Unit
+        Those of `students`.
+    others : dict
+        (student, exercise) -> record, every record of `folder` but those the units grade again (kept
+        as they are; their files are not written).
+
+    Raises
+    ------
+    ValueError
+        When `folder` holds no record, or a student has no notebook in the submissions (naming the
+        students there are).
+    """
+    earlier = RecordStore(folder, {}).load_all() if Path(folder).is_dir() else {}
+    if not earlier:
+        raise ValueError(f"student needs the records of an earlier run; {folder} holds none")
+    found = {u.student for u in units}
+    unknown = [s for s in students if s not in found]
+    if unknown:
+        known = sorted(found | {student for student, _ in earlier})
+        raise ValueError(f"unknown student {unknown[0]!r}: no notebook of theirs in the submissions; "
+                         f"the students are {', '.join(known)}")
+    units = [u for u in units if u.student in students]
+    regraded = {(u.student, u.exercise) for u in units}
+    return units, {key: record for key, record in earlier.items() if key not in regraded}

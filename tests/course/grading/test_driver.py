@@ -142,3 +142,108 @@ def test_a_changed_library_fails_the_run_loudly(tmp_path, monkeypatch):
         grade([subs], out, seed=1, root=ROOT)
     assert "s0_00_warmup" in caught.value.summary["students"]
     assert "Do not trust" in (out / "LIBRARY-CHANGED.txt").read_text()
+
+
+COURSE = """
+[late]
+penalty_per_day = 0.1
+cap = 0.5
+
+[exercises.00_warmup]
+deadline = 2026-10-01T23:59:00+01:00
+
+[extensions.alice]
+00_warmup = 3
+"""
+
+
+def _late_course(tmp_path):
+    """alice and bob submit the master; alice has a 3-day extension, bob is 10 hours late."""
+    subs = tmp_path / "subs"
+    for student in ("alice", "bob"):
+        (subs / student).mkdir(parents=True)
+        (subs / student / "00_warmup.ipynb").write_text(corpus.MASTER.read_text())
+    (tmp_path / "course.toml").write_text(COURSE)
+    (tmp_path / "times.csv").write_text("student,exercise,submitted\nalice,00_warmup,2026-10-03T10:00:00+01:00\n"
+                                        "bob,00_warmup,2026-10-02T09:59:00+01:00\n")
+    return subs, {"course": tmp_path / "course.toml", "times": tmp_path / "times.csv", "seed": 5, "root": ROOT}
+
+
+def test_late_work_is_penalized_and_one_student_is_regraded_alone(tmp_path):
+    """Records carry the late decision and the tests version; --student regrades alice, bob's record is kept."""
+    from particles.course.grading import versions
+
+    subs, options = _late_course(tmp_path)
+    out = tmp_path / "out"
+    grade([subs], out, **options)
+    records = {p.name.split("__")[0]: json.loads(p.read_text()) for p in (out / "records").glob("*.json")}
+    assert records["alice"]["late"]["penalty"] == 0 and "(extension of 3 day(s) for alice)" in \
+        records["alice"]["late"]["reason"]
+    bob = records["bob"]["late"]
+    assert (bob["days_late"], bob["penalty"], bob["source"]) == (1, 1.1, "the times file")
+    assert bob["reason"].startswith("submitted 10 hours after the deadline 2026-10-01 23:59 +01:00: -10% of 11")
+    assert {r["tests_version"] for r in records.values()} == {versions.tests_version(ROOT, "00_warmup")}
+    assert "alice,11,11,11" in (out / "gradebook.csv").read_text()
+    assert "bob,9.9,9.9,11" in (out / "gradebook.csv").read_text()
+    feedback = (out / "bob" / "feedback.md").read_text()
+    assert "**Total: 9.9 / 11 points**" in feedback
+    assert "Late: raw score 11, penalty -1.1 (submitted 10 hours" in feedback
+    assert "Graded by tests version tests=" in feedback
+    assert "Graded by tests version" in (out / "bob" / "feedback.html").read_text()
+    results = json.loads((out / "bob" / "results.json").read_text())
+    assert results["score"] == 9.9 and results["extra_data"]["late"]["00_warmup"]["penalty"] == 1.1
+    assert "Late: raw score 11" in results["output"]
+
+    # bad uses of --student, refused before anything is graded
+    with pytest.raises(ValueError, match="unknown student 'carol'.*the students are alice, bob"):
+        grade([subs], out, students=["carol"], **options)
+    with pytest.raises(ValueError, match="holds none"):
+        grade([subs], tmp_path / "empty", students=["alice"], **options)
+    with pytest.raises(ValueError, match="student needs out"):
+        grade([subs], None, students=["alice"], **options)
+
+    # alice hands in the stub instead: only she is graded again
+    (subs / "alice" / "00_warmup.ipynb").write_text(corpus.STUB.read_text())
+    bob_bytes = (out / "records" / "bob__00_warmup.json").read_bytes()
+    again = grade([subs], out, students=["alice"], **options)
+    assert list(again["students"]) == ["alice"] and again["students"]["alice"][0].score == 0
+    assert (out / "records" / "bob__00_warmup.json").read_bytes() == bob_bytes
+    gradebook = (out / "gradebook.csv").read_text()
+    assert "alice,0,0,11" in gradebook and "bob,9.9,9.9,11" in gradebook
+    assert "**Total: 0 / 11 points**" in (out / "alice" / "feedback.md").read_text()
+
+    # a new extension for bob: --resume keeps both grades and only remakes bob's late decision
+    options["course"].write_text(COURSE + "\n[extensions.bob]\n00_warmup = 1\n")
+    resumed = grade([subs], out, resume=True, **options)
+    assert resumed["resumed"] == 2 and resumed["students"]["bob"][0].penalty == 0
+    assert json.loads((out / "records" / "bob__00_warmup.json").read_text())["late"]["days_late"] == 0
+    assert "bob,11,11,11" in (out / "gradebook.csv").read_text()
+
+
+def test_resume_grades_again_the_records_of_a_changed_test(tmp_path, monkeypatch):
+    """--resume keeps a record only when its tests version is the current one of its exercise."""
+    from particles.course.grading import driver
+    from particles.course.grading.discovery import notebook_digest
+    from particles.course.results.records import SubmissionRecord, TestRecord
+
+    subs, options = _late_course(tmp_path)
+    graded = []
+
+    def fake_batch(units, root, **kwargs):  # no pytest session: complete records, as grade_batch makes them
+        graded.extend(u.student for u in units)
+        return [SubmissionRecord(student=u.student, exercise=u.exercise, notebook=str(u.notebook), complete=True,
+                                 grader_status=0, notebook_sha256=notebook_digest(u.notebook),
+                                 tests=[TestRecord(test="t", name="t", points=11, passed=True)],
+                                 tests_version=driver.tests_version(root, u.exercise)) for u in units]
+
+    monkeypatch.setattr(driver, "grade_batch", fake_batch)
+    out = tmp_path / "out"
+    grade([subs], out, **options)
+    assert sorted(graded) == ["alice", "bob"]
+    graded.clear()
+    assert grade([subs], out, resume=True, **options)["resumed"] == 2 and graded == []
+    real = driver.tests_version
+    monkeypatch.setattr(driver, "tests_version", lambda root, exercise, library=None: real(root, exercise, "new"))
+    assert grade([subs], out, resume=True, **options)["resumed"] == 0 and sorted(graded) == ["alice", "bob"]
+    record = json.loads((out / "records" / "alice__00_warmup.json").read_text())
+    assert record["tests_version"].endswith(" library=new")

@@ -58,6 +58,7 @@ def test_bundle_contents(bundle):
     assert [n for n in names if n.startswith("exercises")] == ["exercises/00_warmup.ipynb"]
     note = zipfile.ZipFile(bundle).read("GRADESCOPE.md").decode()
     assert "| 00_warmup | 1 | 2 |" in note and "manual question" in note
+    assert "--metadata" in zipfile.ZipFile(bundle).read("run_autograder").decode()
     setup = zipfile.ZipFile(bundle).read("setup.sh").decode()
     assert "pip install" in setup
     assert subprocess.run(["bash", "-n", "-c", setup]).returncode == 0
@@ -84,11 +85,25 @@ def test_run_autograder_grades_the_master(bundle, tmp_path):
 
 
 def test_run_autograder_survives_a_broken_submission(bundle, tmp_path):
-    """A submission that is not a notebook still yields a results.json with score 0 and reasons."""
+    """A submission that is not a notebook still yields a results.json with score 0 and reasons.
+
+    With a course file in the source and Gradescope's submission metadata, the submission's time is
+    Gradescope's created_at, and an extension may name the submitter's e-mail.
+    """
     root = _autograder_tree(bundle, tmp_path / "autograder", "this is not JSON")
+    (root / "source" / "course.toml").write_text(
+        "[exercises.00_warmup]\ndeadline = 2026-10-01T23:59:00-07:00\n[late]\npenalty_per_day = 0.25\n"
+        "[extensions.\"student@example.com\"]\n00_warmup = 1\n")
+    (root / "submission_metadata.json").write_text(json.dumps({
+        "id": 1, "created_at": "2026-10-04T08:00:00.365935-07:00",
+        "users": [{"email": "student@example.com", "id": 1234, "name": "Student User"}]}))
     results = _run_autograder(root)
     assert results["score"] == 0 and results["max_score"] == 11
     assert all("could not be read" in t["output"] for t in results["tests"] if not t["extra_data"].get("written"))
+    late = results["extra_data"]["late"]["00_warmup"]
+    assert (late["days_late"], late["penalty"]) == (2, 5.5) and late["source"] == "Gradescope's submission metadata"
+    assert "(extension of 1 day(s) for student@example.com)" in late["reason"]
+    assert "Late: raw score 0, penalty -5.5" in results["output"]
 
 
 def test_run_autograder_writes_a_result_even_when_grading_cannot_start(bundle, tmp_path):

@@ -105,3 +105,14 @@ def test_gradescope_gives_a_stretch_goal_no_points_and_its_label():
         assert entry["extra_data"]["label"] == "stretch goal, not scored"
     assert stretch[0]["status"] == "passed" and stretch[1]["status"] == "failed"
     assert "01_integrator_order: 2 / 3 points" in results["output"]
+
+
+def test_a_late_penalty_follows_the_points_written_grades_add():
+    """A late decision is a fraction: merged written grades raise total_max, and the penalty in points with it."""
+    record = SubmissionRecord(student="ann", exercise="01_x", tests=[TestRecord("t", "t", points=10.0, passed=True)],
+                              late={"submitted": "", "deadline": "", "days_late": 2, "fraction": 0.2,
+                                    "penalty": 2.0, "reason": "2 days late", "source": ""})
+    assert (record.penalty, record.total, record.total_max) == (2.0, 8.0, 10.0)
+    record.written = [{"question": "1", "points": 4.0, "max_points": 5.0, "comment": "", "rubric": "r"}]
+    assert (record.penalty, record.total, record.total_max) == (3.0, 11.0, 15.0)
+    assert "penalty -3 of 15 points" in " ".join(record.late_lines())

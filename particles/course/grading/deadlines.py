@@ -1,0 +1,458 @@
+"""Deadlines and late work: the course file, the time of a submission, and the penalty.
+
+The course file is TOML, ``course.toml`` at the course root or given with
+``particles grade --course FILE``::
+
+    # the late policy of every exercise (each may override it)
+    [late]
+    penalty_per_day = 0.10   # fraction of the exercise's points taken off per started day late
+    cap = 0.50               # never more than this fraction of the exercise's points
+    grace_minutes = 15       # submitted at most this long after the deadline: on time
+
+    [exercises.00_warmup]
+    deadline = 2026-10-01T23:59:00+01:00   # ISO 8601 with a time zone (a TOML date-time or a string)
+
+    [exercises.01_integrator_order]
+    deadline = "2026-10-15T23:59:00+01:00"
+    penalty_per_day = 0.2                  # this exercise's own policy
+
+    [extensions.alice]                     # per student: a new deadline, or extra days
+    00_warmup = 2026-10-03T23:59:00+01:00
+    01_integrator_order = 2
+
+The penalty is a fraction of the exercise's points (the record's
+:attr:`~particles.course.results.records.SubmissionRecord.total_max`): ``penalty_per_day`` per
+*started* day after the student's deadline (one minute late is one day late), at most ``cap``, in
+[0, 1]. The grace period only forgives: a submission after the grace period counts its days late
+from the deadline itself. An exercise the file does not name has no deadline (its records'
+``late`` is None). Every key is checked: an unknown exercise or key, a deadline without a time
+zone, a negative penalty, a cap outside [0, 1] are errors naming the key.
+
+The time of a submission is, in this order: Gradescope's ``submission_metadata.json``
+(``created_at``; ``particles grade --metadata FILE``, which the bundle's ``run_autograder``
+passes), a times file (``--times FILE``: a CSV ``student,exercise,submitted`` as LMS exports
+give, ``submitted`` in ISO 8601 with a zone), else the notebook file's modification time. The
+record's ``late`` says which (``source``).
+"""
+
+import csv
+import json
+import math
+import os
+import tomllib
+from dataclasses import dataclass, field
+from datetime import date, datetime, time, timedelta, timezone
+from pathlib import Path
+
+__all__ = ["LatePolicy", "Course", "load_course", "find_course", "decide", "apply_late", "SubmissionTimes",
+           "read_times", "read_gradescope_metadata", "parse_time", "COURSE_FILE"]
+
+COURSE_FILE = "course.toml"
+"""The course file's name at the course root."""
+
+_POLICY_KEYS = ("penalty_per_day", "cap", "grace_minutes")
+_DAY = timedelta(days=1)
+
+
+def parse_time(value, key):
+    """An aware :class:`~datetime.datetime` from a TOML date-time or an ISO 8601 string.
+
+    Parameters
+    ----------
+    value : datetime or str
+    key : str
+        Where the value was given, for the error (``exercises.00_warmup.deadline``).
+
+    Raises
+    ------
+    ValueError
+        When `value` is not a date-time, or has no time zone (naming `key`).
+    """
+    if isinstance(value, str):
+        try:
+            value = datetime.fromisoformat(value.strip())
+        except ValueError:
+            raise ValueError(f"{key}: {value!r} is not an ISO 8601 date-time "
+                             "(expected e.g. 2026-10-01T23:59:00+01:00)") from None
+    if isinstance(value, date) and not isinstance(value, datetime) or isinstance(value, time):
+        raise ValueError(f"{key}: {value.isoformat()} is not a date and a time with a time zone "
+                         "(expected e.g. 2026-10-01T23:59:00+01:00)")
+    if not isinstance(value, datetime):
+        raise ValueError(f"{key}: expected a date-time with a time zone, got {type(value).__name__} {value!r}")
+    if value.tzinfo is None or value.utcoffset() is None:
+        raise ValueError(f"{key}: {value.isoformat()} has no time zone; write it with one "
+                         f"(e.g. {value.isoformat()}+01:00, or Z for UTC)")
+    return value
+
+
+@dataclass(frozen=True)
+class LatePolicy:
+    """How late work loses points.
+
+    Attributes
+    ----------
+    penalty_per_day : float
+        Fraction of the exercise's points taken off per started day late (>= 0).
+    cap : float
+        The largest fraction taken off, in [0, 1].
+    grace_minutes : float
+        A submission at most this long after the deadline is on time (>= 0).
+    """
+
+    penalty_per_day: float = 0.0
+    cap: float = 1.0
+    grace_minutes: float = 0.0
+
+    @classmethod
+    def from_table(cls, table, key, base=None):
+        """The policy of a TOML table (keys of :data:`_POLICY_KEYS`), defaults from `base`."""
+        base = base or cls()
+        values = {name: getattr(base, name) for name in _POLICY_KEYS}
+        for name in _POLICY_KEYS:
+            if name not in table:
+                continue
+            value = table[name]
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ValueError(f"{key}.{name}: expected a number, got {value!r}")
+            if value < 0:
+                raise ValueError(f"{key}.{name}: must be >= 0, got {value!r}")
+            if name == "cap" and value > 1:
+                raise ValueError(f"{key}.cap: a fraction of the exercise's points, in [0, 1], got {value!r}")
+            values[name] = float(value)
+        return cls(**values)
+
+
+@dataclass
+class Course:
+    """The deadlines of a course file (see the module's docstring).
+
+    Attributes
+    ----------
+    deadlines : dict
+        exercise -> aware datetime.
+    policies : dict
+        exercise -> :class:`LatePolicy`.
+    extensions : dict
+        student -> {exercise -> aware datetime (a new deadline) or float (extra days)}.
+    path : str
+        The file read ("" when made in code).
+    """
+
+    deadlines: dict = field(default_factory=dict)
+    policies: dict = field(default_factory=dict)
+    extensions: dict = field(default_factory=dict)
+    path: str = ""
+
+    def deadline_of(self, student, exercise, aliases=()):
+        """(deadline, why) of `student` for `exercise`, after extensions; (None, "") when none applies.
+
+        `aliases` are other names of the student (Gradescope's e-mail or id) an extension may use.
+        """
+        deadline = self.deadlines.get(exercise)
+        if deadline is None:
+            return None, ""
+        for name in (student, *aliases):
+            given = self.extensions.get(str(name), {}).get(exercise)
+            if isinstance(given, datetime):
+                return given, f"extension for {name}"
+            if given is not None:
+                return deadline + timedelta(days=given), f"extension of {_fmt(given)} day(s) for {name}"
+        return deadline, ""
+
+
+def load_course(path, exercises):
+    """Read and check a course file.
+
+    Parameters
+    ----------
+    path : path
+        The TOML file.
+    exercises : sequence of str
+        The course's exercises (``NN_topic``): any other name in the file is an error.
+
+    Returns
+    -------
+    Course
+
+    Raises
+    ------
+    ValueError
+        On a missing or malformed file, naming the file and the key at fault.
+    """
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as error:
+        raise ValueError(f"cannot read the course file {path}: {error.strerror or error}") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        raise ValueError(f"{path} is not valid TOML: {error}") from None
+    try:
+        return _course(data, list(exercises), str(path))
+    except ValueError as error:
+        raise ValueError(f"{path}: {error}") from None
+
+
+def _table(data, key):
+    value = data.get(key, {})
+    if not isinstance(value, dict):
+        raise ValueError(f"{key}: expected a table ([{key}]), got {value!r}")
+    return value
+
+
+def _course(data, exercises, path=""):
+    unknown = sorted(set(data) - {"late", "exercises", "extensions"})
+    if unknown:
+        raise ValueError(f"unknown key {unknown[0]!r}; expected late, exercises or extensions")
+    known = ", ".join(exercises)
+
+    def check_exercise(name, key):
+        if name not in exercises:
+            raise ValueError(f"{key}: unknown exercise {name!r}; expected one of {known}")
+
+    late = _table(data, "late")
+    extra = sorted(set(late) - set(_POLICY_KEYS))
+    if extra:
+        raise ValueError(f"late.{extra[0]}: unknown key; expected {', '.join(_POLICY_KEYS)}")
+    base = LatePolicy.from_table(late, "late")
+    course = Course(path=path)
+    for name, table in _table(data, "exercises").items():
+        key = f"exercises.{name}"
+        check_exercise(name, key)
+        if not isinstance(table, dict):
+            raise ValueError(f"{key}: expected a table ([{key}]) with a deadline, got {table!r}")
+        extra = sorted(set(table) - {"deadline", *_POLICY_KEYS})
+        if extra:
+            raise ValueError(f"{key}.{extra[0]}: unknown key; expected deadline, {', '.join(_POLICY_KEYS)}")
+        if "deadline" not in table:
+            raise ValueError(f"{key}: no deadline (add deadline = 2026-10-01T23:59:00+01:00, or remove the table)")
+        course.deadlines[name] = parse_time(table["deadline"], f"{key}.deadline")
+        course.policies[name] = LatePolicy.from_table(table, key, base)
+    for student, table in _table(data, "extensions").items():
+        key = f"extensions.{student}"
+        if not isinstance(table, dict):
+            raise ValueError(f"{key}: expected a table of exercise = new deadline or extra days, got {table!r}")
+        course.extensions[student] = {}
+        for name, value in table.items():
+            check_exercise(name, f"{key}.{name}")
+            if name not in course.deadlines:
+                raise ValueError(f"{key}.{name}: an extension of an exercise without a deadline "
+                                 f"(add [exercises.{name}] with its deadline)")
+            if isinstance(value, bool) or not isinstance(value, (int, float, str, datetime, date, time)):
+                raise ValueError(f"{key}.{name}: expected a new deadline or a number of extra days, got {value!r}")
+            if isinstance(value, (int, float)):
+                if not math.isfinite(value) or value < 0:
+                    raise ValueError(f"{key}.{name}: extra days must be a number >= 0, got {value!r}")
+                course.extensions[student][name] = float(value)
+            else:
+                course.extensions[student][name] = parse_time(value, f"{key}.{name}")
+    return course
+
+
+def find_course(root, exercises, path=None):
+    """The course of ``--course FILE`` (`path`), else of ``course.toml`` at `root`, else None (no deadlines)."""
+    if path is not None:
+        return load_course(path, exercises)
+    default = Path(root) / COURSE_FILE
+    return load_course(default, exercises) if default.exists() else None
+
+
+def _fmt(x):
+    return f"{x:g}"
+
+
+def _when(moment):
+    """``2026-10-01 23:59 +01:00`` (seconds only when there are some)."""
+    text = moment.strftime("%Y-%m-%d %H:%M" + (":%S" if moment.second else ""))
+    offset = moment.strftime("%z")
+    return f"{text} {offset[:3]}:{offset[3:]}" if offset else text
+
+
+def _duration(delta):
+    """``2 days 3 hours``, ``1 hour 5 minutes``, ``40 seconds``: the two largest units."""
+    seconds = int(delta.total_seconds())
+    parts = []
+    for name, size in (("day", 86400), ("hour", 3600), ("minute", 60), ("second", 1)):
+        count, seconds = divmod(seconds, size)
+        if count:
+            parts.append(f"{count} {name}{'s' if count != 1 else ''}")
+    return " ".join(parts[:2]) or "0 seconds"
+
+
+def decide(submitted, deadline, policy, total_max, why="", source=""):
+    """The late-work decision of one record.
+
+    Parameters
+    ----------
+    submitted, deadline : datetime
+        Aware date-times: when the work was submitted, and the student's deadline (after extensions).
+    policy : LatePolicy
+    total_max : float
+        The exercise's points, of which the penalty is a fraction.
+    why : str
+        Why the deadline is not the exercise's ("extension for alice"), "" when it is.
+    source : str
+        Where the submission time comes from (see :class:`SubmissionTimes`).
+
+    Returns
+    -------
+    dict
+        ``submitted`` and ``deadline`` (ISO 8601), ``days_late`` (started days after the deadline, 0
+        when on time or within the grace period), ``fraction`` (of `total_max`), ``penalty`` (points:
+        `fraction` of `total_max`; the record recomputes it when written grades change its total_max),
+        ``reason`` (one sentence, in percent, so that it stays true), ``source``.
+
+    Examples
+    --------
+    >>> from datetime import datetime, timedelta, timezone
+    >>> due = datetime(2026, 10, 1, 23, 59, tzinfo=timezone(timedelta(hours=1)))
+    >>> late = decide(due + timedelta(days=1, hours=3), due, LatePolicy(0.1, 0.5), 30)
+    >>> late["days_late"], late["penalty"]
+    (2, 6.0)
+    >>> print(late["reason"])  # doctest: +NORMALIZE_WHITESPACE
+    submitted 1 day 3 hours after the deadline 2026-10-01 23:59 +01:00: -20% of the exercise's points
+    (2 days late at 10% a day, cap 50%)
+    """
+    submitted, deadline = parse_time(submitted, "submitted"), parse_time(deadline, "deadline")
+    shown = submitted.astimezone(deadline.tzinfo)
+    where = f"the deadline {_when(deadline)}" + (f" ({why})" if why else "")
+    late = shown - deadline
+    days, fraction = 0, 0.0
+    if late <= timedelta(0):
+        reason = f"submitted {_when(shown)}, before {where}: no penalty"
+    elif late <= timedelta(minutes=policy.grace_minutes):
+        reason = (f"submitted {_duration(late)} after {where}, within the grace period of "
+                  f"{_fmt(policy.grace_minutes)} minutes: no penalty")
+    else:
+        days = math.ceil(late / _DAY)
+        fraction = min(policy.penalty_per_day * days, policy.cap)
+        capped = policy.penalty_per_day * days > policy.cap
+        reason = (f"submitted {_duration(late)} after {where}: -{_fmt(round(100 * fraction, 4))}% of the "
+                  f"exercise's points ({days} day{'s' if days != 1 else ''} late "
+                  f"at {_fmt(round(100 * policy.penalty_per_day, 4))}% a day, "
+                  f"{'capped at' if capped else 'cap'} {_fmt(round(100 * policy.cap, 4))}%)")
+    return {"submitted": shown.isoformat(), "deadline": deadline.isoformat(), "days_late": days,
+            "fraction": fraction, "penalty": round(fraction * total_max, 6), "reason": reason, "source": source}
+
+
+def apply_late(record, course, submitted, source="", aliases=()):
+    """Set ``record.late`` from the course's deadline of its student and exercise.
+
+    Parameters
+    ----------
+    record : SubmissionRecord
+        Changed in place: ``late`` becomes the decision (:func:`decide`), or None when the course
+        gives the exercise no deadline (or there is no course, or no submission time).
+    course : Course or None
+    submitted : datetime or None
+    source : str
+    aliases : sequence of str
+        Other names of the student an extension may use.
+
+    Returns
+    -------
+    SubmissionRecord
+        `record`.
+    """
+    deadline, why = course.deadline_of(record.student, record.exercise, aliases) if course else (None, "")
+    if deadline is None or submitted is None:
+        record.late = None
+    else:
+        record.late = decide(submitted, deadline, course.policies[record.exercise], record.total_max, why, source)
+    return record
+
+
+def read_gradescope_metadata(path):
+    """(created_at, aliases) of Gradescope's ``submission_metadata.json``.
+
+    Gradescope writes the file to ``/autograder/submission_metadata.json``
+    (https://gradescope-autograders.readthedocs.io/en/latest/submission_metadata/): ``created_at``
+    is the submission's time (ISO 8601 with its zone), ``users`` the submitters (``email``, ``id``,
+    ``name``, sometimes ``sid``), whose e-mails and ids an extension may name.
+
+    Raises
+    ------
+    ValueError
+        When the file cannot be read, is not JSON, or has no valid ``created_at``.
+    """
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as error:
+        raise ValueError(f"cannot read Gradescope's submission metadata {path}: {error}") from None
+    if not isinstance(data, dict) or "created_at" not in data:
+        raise ValueError(f"{path}: Gradescope's submission metadata has no created_at")
+    submitted = parse_time(data["created_at"], f"{path}: created_at")
+    aliases = []
+    for user in data.get("users") or []:
+        if isinstance(user, dict):
+            aliases += [str(user[k]) for k in ("email", "sid", "id") if user.get(k) not in (None, "")]
+    return submitted, aliases
+
+
+def read_times(path):
+    """The times file: a CSV with the columns ``student``, ``exercise``, ``submitted`` (others ignored).
+
+    Returns
+    -------
+    dict
+        (student, exercise) -> aware datetime. An empty ``exercise`` cell stands for every exercise
+        (key ``(student, "")``).
+
+    Raises
+    ------
+    ValueError
+        When the file cannot be read, lacks a column, or a row's time is not ISO 8601 with a zone
+        (naming the row), or a student and exercise are given twice.
+    """
+    path = Path(path)
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as handle:
+            rows = list(csv.DictReader(handle))
+            columns = rows and list(rows[0]) or []
+    except (OSError, UnicodeDecodeError, csv.Error) as error:
+        raise ValueError(f"cannot read the times file {path}: {error}") from None
+    missing = [c for c in ("student", "exercise", "submitted") if c not in columns]
+    if rows and missing:
+        raise ValueError(f"{path}: no column {', '.join(missing)}; expected a header student,exercise,submitted")
+    times = {}
+    for line, row in enumerate(rows, start=2):
+        key = ((row["student"] or "").strip(), (row["exercise"] or "").strip())
+        if not key[0]:
+            raise ValueError(f"{path}, line {line}: no student")
+        if key in times:
+            raise ValueError(f"{path}, line {line}: {key[0]} {key[1] or '(every exercise)'} is given twice")
+        times[key] = parse_time(row["submitted"] or "", f"{path}, line {line}, submitted")
+    return times
+
+
+class SubmissionTimes:
+    """When each notebook was submitted: Gradescope's metadata, else a times file, else the file's time.
+
+    Parameters
+    ----------
+    metadata : path, optional
+        Gradescope's ``submission_metadata.json`` (every notebook graded is of that one submission).
+    times : path, optional
+        A times file (:func:`read_times`).
+    """
+
+    def __init__(self, metadata=None, times=None):
+        self.metadata = read_gradescope_metadata(metadata) if metadata is not None else None
+        self.times = read_times(times) if times is not None else {}
+
+    def aliases(self):
+        """Other names of the submitter (Gradescope's e-mails and ids) an extension may use."""
+        return tuple(self.metadata[1]) if self.metadata else ()
+
+    def of(self, unit):
+        """(submitted, source) of a :class:`~particles.course.grading.discovery.Unit`; (None, "") if unknown."""
+        if self.metadata is not None:
+            return self.metadata[0], "Gradescope's submission metadata"
+        for key in ((unit.student, unit.exercise), (unit.student, "")):
+            if key in self.times:
+                return self.times[key], "the times file"
+        try:
+            mtime = os.stat(unit.notebook).st_mtime
+        except OSError:
+            return None, ""
+        return datetime.fromtimestamp(mtime, tz=timezone.utc), "the notebook file's modification time"
