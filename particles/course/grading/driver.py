@@ -32,7 +32,10 @@ What the driver does against a submission that gets out of its worker:
   ``--resume`` grades only the rest (:mod:`particles.course.results.store`).
 
 Which notebooks are graded, and as which student and exercise, is decided in
-:mod:`particles.course.grading.discovery`.
+:mod:`particles.course.grading.discovery`; zips are opened, and notebooks
+checked before they are graded, in :mod:`particles.course.grading.intake`. A
+notebook rejected there is never given to a session: its record fails every
+test of the exercise's catalog with the one-line reason.
 """
 
 import hashlib
@@ -40,6 +43,7 @@ import json
 import math
 import os
 import secrets
+import shutil
 import stat
 import subprocess
 import sys
@@ -150,10 +154,19 @@ def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None):
         notes.append(answers_note(written))
     layers = session.isolation or {}
     return SubmissionRecord(
-        student=unit.student, exercise=unit.exercise, notebook=str(unit.notebook), seed=seed,
+        student=unit.student, exercise=unit.exercise, notebook=unit.where, seed=seed,
         seconds=round(session.seconds if session.complete else seconds, 2), tests=records, notes=notes,
         written_answers=written, grader_status=status, complete=session.complete, isolation=layers,
         sandbox=isolation_module.describe(layers), notebook_sha256=notebook_digest(unit.notebook))
+
+
+def _rejected(unit, tests):
+    """The record of a unit discovery rejected: every test of `tests` failed with its reason; never resumed."""
+    return SubmissionRecord(
+        student=unit.student, exercise=unit.exercise, notebook=unit.where, seconds=0.0,
+        tests=[TestRecord.from_dict(t).failed(unit.rejected) for t in tests],
+        notes=[f"Your notebook was not graded: {unit.rejected}"], grader_status=None, complete=True,
+        sandbox="not run: the notebook was not graded")
 
 
 def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, memory_mb=None, private=(),
@@ -296,7 +309,12 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     Parameters
     ----------
     paths : sequence of path
-        Notebooks, or folders of notebooks (see :mod:`particles.course.grading.discovery`).
+        Notebooks, folders of notebooks, zips of them (LMS exports; see
+        :mod:`particles.course.grading.discovery`). A notebook the grader does
+        not read (:func:`particles.course.grading.intake.read_notebook`), or
+        several notebooks of one student and exercise from different places,
+        get a record where every test failed with the one-line reason, and
+        are among the ``problems``.
     out : path, optional
         Output folder: ``gradebook.csv``, ``<student>/results.json``,
         ``<student>/feedback.md`` and ``<student>/feedback.html`` (with the
@@ -342,7 +360,8 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     -------
     dict
         ``students`` (student -> list of per-exercise results), ``exercises``
-        (names graded, in order), ``problems`` (notebooks not graded),
+        (names graded, in order), ``problems`` (one line per notebook not
+        graded, zip refused, link not followed...),
         ``isolation`` (one line: the walls the workers had), ``resumed``
         (how many records were kept from an earlier run).
 
@@ -374,7 +393,20 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     plan = isolation if isinstance(isolation, isolation_module.Plan) else isolation_module.plan(isolation)
     isolation_module.protect_this_process()
     before = isolation_module.library_checksum()  # everything the driver needs is imported by now
-    units, problems = find_submissions(paths, list(tests), exercise)
+    intake = tempfile.mkdtemp(prefix="particles-intake-")  # the zips' notebooks, while they are graded
+    try:
+        return _grade(paths, out, intake, before, tests, root, plan, jobs=jobs, exercise=exercise,
+                      public_only=public_only, seed=seed, time_limit=time_limit, memory_mb=memory_mb,
+                      private=private, hidden_visibility=hidden_visibility, python=python, gradescope=gradescope,
+                      progress=progress, resume=resume, audit_hook=audit_hook)
+    finally:
+        shutil.rmtree(intake, ignore_errors=True)
+
+
+def _grade(paths, out, intake, before, tests, root, plan, *, jobs, exercise, public_only, seed, time_limit,
+           memory_mb, private, hidden_visibility, python, gradescope, progress, resume, audit_hook):
+    """:func:`grade` once its arguments are checked, with the private folder `intake` for the zips."""
+    units, problems = find_submissions(paths, list(tests), exercise, workdir=intake)
     if out is not None:
         out = Path(out)
         (out / "logs").mkdir(parents=True, exist_ok=True)
@@ -382,16 +414,18 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     # its own code from the grader, so it never needs to read its notebook either
     private = [*map(str, private), *(str(Path(p).resolve()) for p in paths if Path(p).exists())]
     private += [str(out.resolve())] if out is not None else []
+    private.append(str(Path(intake).resolve()))
     options = {"public_only": bool(public_only), "seed": seed, "time_limit": time_limit, "memory_mb": memory_mb,
                "audit_hook": bool(audit_hook)}
     store = RecordStore(out / "records", options) if out is not None else None
     done = {}
     if resume:
         for unit in units:
-            kept = store.load(unit)
+            kept = store.load(unit) if not unit.rejected else None
             if kept is not None:
+                kept.notebook = unit.where
                 done[(unit.student, unit.exercise)] = kept
-    todo = [u for u in units if (u.student, u.exercise) not in done]
+    todo = [u for u in units if (u.student, u.exercise) not in done and not u.rejected]
     lock = threading.Lock()
 
     def finished(results):
@@ -423,10 +457,21 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         finished(results)
         return results
 
+    catalogs = {}
+    for unit in units:  # a notebook not graded gets its record at once: 0, saying why
+        if unit.rejected:
+            if unit.exercise not in catalogs:
+                try:
+                    catalogs[unit.exercise] = catalog(root, unit.exercise, public_only, python)
+                except RuntimeError as error:
+                    catalogs[unit.exercise] = []
+                    problems.append(str(error))
+            finished([_rejected(unit, catalogs[unit.exercise])])
     batches = _batches(todo, jobs)
     with ThreadPoolExecutor(max_workers=jobs) as pool:
         list(pool.map(work, batches))
     results = [done[(u.student, u.exercise)] for u in units]
+    kept = sum(1 for u in units if not u.rejected) - len(todo)
     students = {}
     for result in results:
         students.setdefault(result.student, []).append(result)
@@ -434,7 +479,7 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     layers = [r.isolation for r in results if r.isolation]
     summary = {"students": students, "exercises": exercises, "problems": problems,
                "isolation": isolation_module.describe(layers[0] if layers else {}) if results else
-               f"planned: {plan.to_option()}", "resumed": len(units) - len(todo)}
+               f"planned: {plan.to_option()}", "resumed": kept}
     changed = isolation_module.library_changes(before)
     if out is not None:
         _write_outputs(out, done, tests, hidden_visibility)
