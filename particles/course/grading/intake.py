@@ -310,6 +310,8 @@ def extract_zip(path, dest, limits=DEFAULT_LIMITS):
     ------
     ZipRefused
         When the zip cannot be read or is refused; nothing is left in `dest`.
+    FileExistsError
+        When `dest` exists (nothing is written into a folder someone else made).
     """
     path, dest = Path(path), Path(dest)
     os.mkdir(dest, 0o700)
