@@ -108,13 +108,16 @@ def _student_name(text):
 
 
 def _preference(unit):
-    """Which of two notebooks of one student and exercise to grade: the exact name, then the newest."""
+    """Which of two notebooks of one student and exercise to grade: the exact name (after Canvas's prefix), then
+    the newest (then the last in sorted order, so that the choice never depends on the order of discovery)."""
     path = Path(unit.notebook)
+    match = CANVAS.match(path.name)
+    name = match.group("name") if match else path.name
     try:
         mtime = path.stat().st_mtime
     except OSError:
         mtime = float("-inf")
-    return (path.name == f"{unit.exercise}.ipynb", mtime, str(path))
+    return (name == f"{unit.exercise}.ipynb", mtime, str(path))
 
 
 def _gradescope_names(folder):
