@@ -264,7 +264,7 @@ def find_submissions(paths, exercises, exercise=None, *, workdir=None, limits=DE
             try:
                 content, rejected = read_notebook(nb, limits), ""
             except NotebookRejected as error:
-                content, rejected = None, f"{Path(origin or nb).name} {error}"
+                content, rejected = None, f"your notebook {Path(origin or nb).name} could not be read: it {error}"
             name = _exercise_of(nb, content, exercises, exercise)
             if name is None:
                 problems.append(f"{where}: cannot tell which exercise this is; pass --exercise"

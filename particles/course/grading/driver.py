@@ -165,7 +165,7 @@ def _rejected(unit, tests):
     return SubmissionRecord(
         student=unit.student, exercise=unit.exercise, notebook=unit.where, seconds=0.0,
         tests=[TestRecord.from_dict(t).failed(unit.rejected) for t in tests],
-        notes=[f"Your notebook was not graded: {unit.rejected}"], grader_status=None, complete=True,
+        notes=[f"Not graded: {unit.rejected}"], grader_status=None, complete=True,
         sandbox="not run: the notebook was not graded")
 
 

@@ -119,7 +119,7 @@ def test_a_broken_link_is_a_notebook_that_cannot_be_read(tmp_path):
     """A link to nothing inside the folder is kept as its student's notebook, rejected: 'cannot be read'."""
     (tmp_path / "ivan.ipynb").symlink_to(tmp_path / "gone.ipynb")
     units, _ = found([tmp_path])
-    assert "ivan.ipynb cannot be read" in units["ivan"].rejected
+    assert "your notebook ivan.ipynb could not be read: it cannot be read" in units["ivan"].rejected
 
 
 # -- malformed notebooks ---------------------------------------------------------------------------------------
@@ -133,10 +133,10 @@ def test_a_malformed_notebook_is_a_rejected_unit_and_a_problem(tmp_path):
     put(tmp_path / "ok.ipynb")
     units, problems = found([tmp_path])
     assert sorted(units) == ["judy", "ken", "leo", "mia", "ok"] and not units["ok"].rejected
-    assert units["judy"].rejected.startswith("judy.ipynb is not valid JSON")
-    assert units["ken"].rejected.startswith("ken.ipynb is nbformat 3, expected 4")
-    assert units["leo"].rejected == "leo.ipynb is a folder, not a notebook file"
-    assert units["mia"].rejected.startswith("mia.ipynb is not UTF-8 text")
+    assert units["judy"].rejected.startswith("your notebook judy.ipynb could not be read: it is not valid JSON")
+    assert units["ken"].rejected.startswith("your notebook ken.ipynb could not be read: it is nbformat 3, expected 4")
+    assert units["leo"].rejected == "your notebook leo.ipynb could not be read: it is a folder, not a notebook file"
+    assert units["mia"].rejected.startswith("your notebook mia.ipynb could not be read: it is not UTF-8 text")
     assert sorted(p.split(":")[0] for p in problems) == sorted(str(tmp_path / f"{n}.ipynb")
                                                              for n in ("judy", "ken", "leo", "mia"))
 
@@ -146,8 +146,8 @@ def test_a_bad_notebook_of_an_unknown_exercise_is_reported_with_its_reason(tmp_p
     put(tmp_path / "nia.ipynb", "[]")
     units, problems = found([tmp_path], exercise=None)
     assert units == {} and problems == [f"{tmp_path / 'nia.ipynb'}: cannot tell which exercise this is; pass "
-                                        "--exercise (nia.ipynb holds a list in JSON, not a notebook (an object "
-                                        "with cells))"]
+                                        "--exercise (your notebook nia.ipynb could not be read: it holds a list in "
+                                        "JSON, not a notebook (an object with cells))"]
 
 
 def test_the_limits_reach_discovery(tmp_path):

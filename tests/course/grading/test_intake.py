@@ -283,8 +283,8 @@ def test_a_run_over_bad_input_grades_everyone_and_loses_no_one(tmp_path):
         assert len(record["tests"]) > 5 and len(reasons) == 1 and "\n" not in reasons.pop()
         assert record["grader_status"] is None  # never kept by --resume: checked again next time
     record = json.loads((out / "records" / "latin1__00_warmup.json").read_text())
-    assert "latin1.ipynb is not UTF-8 text" in record["tests"][0]["reason"]
-    assert "Your notebook was not graded: latin1.ipynb is not UTF-8" in record["notes"][0]
+    assert "your notebook latin1.ipynb could not be read: it is not UTF-8 text" in record["tests"][0]["reason"]
+    assert "Not graded: your notebook latin1.ipynb could not be read: it is not UTF-8" in record["notes"][0]
     conflict = json.loads((out / "records" / "Alice__00_warmup.json").read_text())["tests"][0]["reason"]
     assert str(subs / "Alice" / "00_warmup.ipynb") in conflict and str(subs / "alice.ipynb") in conflict
     assert "mallory" not in rows and f"{subs / 'mallory.ipynb'}: a link to" in done.stderr
