@@ -16,7 +16,8 @@ Layouts read (:func:`find_submissions`):
   private folder (:func:`particles.course.grading.intake.extract_zip`: a zip
   with links, paths out of it or the shape of a bomb is refused, saying why)
   and read as a folder; a single folder at its top holding the students'
-  folders (``export/alice/...``) is looked into.
+  folders (``export/alice/...``) is looked into. A zip inside a folder is
+  not opened (it is reported).
 
 Inside a folder, links are not followed out of it: a link to a file or a
 folder outside the folder, and any link to a folder, is reported and not
@@ -171,18 +172,23 @@ def _walk(root, problems):
                 stack.append((path, parts))
             elif notebook:
                 out.append((path, parts))
+            elif entry.name.lower().endswith(".zip"):
+                problems.append(f"{path}: a zip in a folder is not opened; give it as a SUBMISSION of its own")
     return sorted(out)
 
 
 def _unwrap(folder):
-    """Into a zip's single top folder while it holds only folders (``export/alice/...``)."""
+    """Into a zip's single top folder while it holds students' folders (``export/alice/..., export/bob/...``,
+    or Gradescope's ``submission_metadata.yml`` beside them) and no notebook."""
     folder = Path(folder)
     while True:
         entries = [e for e in folder.iterdir() if not skipped_name(e.name)]
-        if len(entries) != 1 or not entries[0].is_dir() or entries[0].is_symlink():
+        if len(entries) != 1 or not entries[0].is_dir():
             return folder
         inner = [e for e in entries[0].iterdir() if not skipped_name(e.name)]
-        if not inner or not all(e.is_dir() or e.name == "submission_metadata.yml" for e in inner):
+        folders = sum(e.is_dir() for e in inner)
+        if any(e.name.lower().endswith(".ipynb") for e in inner) or not (
+                folders >= 2 or folders and any(e.name == "submission_metadata.yml" for e in inner)):
             return folder
         folder = entries[0]
 

@@ -303,7 +303,7 @@ def _batches(units, jobs, largest=20):
 
 def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=None, time_limit=None,
           memory_mb=None, root=None, private=(), hidden_visibility="after_published", python=None,
-          gradescope=None, progress=None, isolation="auto", resume=False, audit_hook=True):
+          gradescope=None, progress=None, isolation="auto", resume=False, audit_hook=True, limits=None):
     """Grade submissions; write results.json and feedback per student and a gradebook.
 
     Parameters
@@ -355,6 +355,9 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     audit_hook : bool
         False leaves the workers with the operating system's walls only (see
         :func:`grade_batch`); for tests of those walls, never for grading.
+    limits : particles.course.grading.intake.Limits, optional
+        What a notebook and a zip may hold (default
+        :data:`~particles.course.grading.intake.DEFAULT_LIMITS`).
 
     Returns
     -------
@@ -398,15 +401,16 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         return _grade(paths, out, intake, before, tests, root, plan, jobs=jobs, exercise=exercise,
                       public_only=public_only, seed=seed, time_limit=time_limit, memory_mb=memory_mb,
                       private=private, hidden_visibility=hidden_visibility, python=python, gradescope=gradescope,
-                      progress=progress, resume=resume, audit_hook=audit_hook)
+                      progress=progress, resume=resume, audit_hook=audit_hook, limits=limits)
     finally:
         shutil.rmtree(intake, ignore_errors=True)
 
 
 def _grade(paths, out, intake, before, tests, root, plan, *, jobs, exercise, public_only, seed, time_limit,
-           memory_mb, private, hidden_visibility, python, gradescope, progress, resume, audit_hook):
+           memory_mb, private, hidden_visibility, python, gradescope, progress, resume, audit_hook, limits):
     """:func:`grade` once its arguments are checked, with the private folder `intake` for the zips."""
-    units, problems = find_submissions(paths, list(tests), exercise, workdir=intake)
+    units, problems = find_submissions(paths, list(tests), exercise, workdir=intake,
+                                       **({"limits": limits} if limits is not None else {}))
     if out is not None:
         out = Path(out)
         (out / "logs").mkdir(parents=True, exist_ok=True)

@@ -2,22 +2,17 @@
 
 Two gates stand between the files an instructor is given and the grader:
 
-* :func:`read_notebook` reads one submitted notebook within :class:`Limits`
-  (file size, cell count, attachment size) and checks that it is a Jupyter
-  notebook of format 4 (UTF-8 JSON, an object with a list of cells, each with
-  a type and a source, no two cells with one id). A notebook that is not
-  gets :class:`NotebookRejected`, whose message is one line for the student
-  (``is not valid JSON (Expecting ',' delimiter at line 3, column 5)``): the
-  driver records 0 for it with that reason and goes on with the others.
-* :func:`extract_zip` opens an export of an LMS (Canvas, Moodle, Gradescope)
-  into a new private folder. It refuses the whole zip (:class:`ZipRefused`,
-  naming the zip and the member) when a member would land outside the folder
-  (an absolute path, ``..``), is a link, a device or a pipe, is encrypted, or
-  when the zip is a bomb: too many members, a member or a total too large
-  once uncompressed, or a compression ratio no notebook has. Only notebooks
-  (and Gradescope's ``submission_metadata.yml``) are written; a zip inside
-  the zip is not opened but reported, and macOS's ``__MACOSX/`` and ``._*``
-  files are skipped.
+* :func:`read_notebook` reads one submitted notebook within :class:`Limits` (file size, cell count,
+  attachment size) and checks that it is a Jupyter notebook of format 4 (UTF-8 JSON, an object with a
+  list of cells, each with a type and a source, no two cells with one id). A notebook that is not gets
+  :class:`NotebookRejected`, whose message is one line for the student (``is not valid JSON (Expecting
+  ',' delimiter at line 3, column 5)``): the driver records 0 for it with that reason and goes on.
+* :func:`extract_zip` opens an export of an LMS (Canvas, Moodle, Gradescope) into a new private folder.
+  It refuses the whole zip (:class:`ZipRefused`, naming the zip and the member) when a member would land
+  outside the folder (an absolute path, ``..``), is a link, a device or a pipe, is encrypted, or when the
+  zip is a bomb: too many members, a member or a total too large once uncompressed, or a compression
+  ratio no notebook has. Only notebooks (and Gradescope's ``submission_metadata.yml``) are written; a zip
+  inside the zip is not opened but reported; macOS's ``__MACOSX/`` and ``._*`` files are skipped.
 
 Which notebooks are graded, and as which student, is decided in
 :mod:`particles.course.grading.discovery`, which calls both.
@@ -104,7 +99,7 @@ def _size(n):
     if n < 1000:
         return f"{n} bytes"
     for unit, scale in (("kB", 1e3), ("MB", 1e6), ("GB", 1e9)):
-        if n < 1000 * scale or unit == "GB":
+        if n / scale < 999.5 or unit == "GB":
             return f"{n / scale:.3g} {unit}"
 
 
@@ -225,9 +220,12 @@ def check_notebook(notebook, limits=DEFAULT_LIMITS):
         if "source" not in cell:
             raise NotebookRejected(f"has a {kind} cell (cell {k}) without a source")
         source = cell["source"]
-        if not (isinstance(source, str) or isinstance(source, list) and all(isinstance(s, str) for s in source)):
-            raise NotebookRejected(f"has a {kind} cell (cell {k}) whose source is {_kind(source)} "
-                                   "that is not text")
+        if isinstance(source, list) and not all(isinstance(s, str) for s in source):
+            odd = next(s for s in source if not isinstance(s, str))
+            raise NotebookRejected(f"has a {kind} cell (cell {k}) whose source is a list holding {_kind(odd)}, "
+                                   "not only text")
+        if not isinstance(source, (str, list)):
+            raise NotebookRejected(f"has a {kind} cell (cell {k}) whose source is {_kind(source)}, not text")
         if "id" in cell:
             cell_id = cell["id"]
             if not isinstance(cell_id, str):
@@ -372,12 +370,14 @@ def _extract(path, dest, limits):
 
 def _write_member(archive, info, target, limits, refuse):
     """Copy one member to `target` (a new file, never through a link, dated as in the zip); returns its bytes."""
-    target.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
     flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0)
     try:
+        target.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
         handle = os.open(target, flags, 0o600)
     except FileExistsError:
-        raise refuse(f"it holds two members named {info.filename!r} (letter case aside)") from None
+        raise refuse(f"member {info.filename!r} collides with another member (letter case aside)") from None
+    except OSError as error:
+        raise refuse(f"member {info.filename!r} cannot be written ({error.strerror or error})") from None
     count = 0
     try:
         with os.fdopen(handle, "wb") as out, archive.open(info) as member:

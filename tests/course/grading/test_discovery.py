@@ -228,3 +228,20 @@ def test_rglob_would_have_followed_what_discovery_does_not(tmp_path):
     (tmp_path / "subs" / "sam.ipynb").symlink_to(tmp_path / "outside" / "00_warmup.ipynb")
     assert [p.name for p in (tmp_path / "subs").rglob("*.ipynb")] == ["sam.ipynb"]
     assert found([tmp_path / "subs"])[0] == {}
+
+
+def test_a_zip_is_looked_into_only_when_its_top_folder_holds_students(tmp_path):
+    """export/{a,b}/ is unwrapped to students a and b; one student's zip (pat/...) keeps pat; a zip inside
+    a folder is reported, not opened."""
+    work = tmp_path / "work"
+    work.mkdir(mode=0o700)
+    export = make_zip(tmp_path / "export.zip", {"export/uma/00_warmup.ipynb": notebook(),
+                                                "export/vic/00_warmup.ipynb": notebook(),
+                                                "export/readme.txt": "hello"})
+    single = make_zip(tmp_path / "single.zip", {"wes/00_warmup.ipynb": notebook(), "wes/notes/a.txt": "x"})
+    (tmp_path / "subs").mkdir()
+    (tmp_path / "subs" / "xia.zip").write_bytes(single.read_bytes())
+    units, problems = found([export, single, tmp_path / "subs"], workdir=work)
+    assert sorted(units) == ["uma", "vic", "wes"]
+    assert problems == [f"{tmp_path / 'subs' / 'xia.zip'}: a zip in a folder is not opened; give it as a "
+                        "SUBMISSION of its own"]

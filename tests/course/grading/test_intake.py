@@ -73,7 +73,7 @@ MALFORMED = {
     "bad_cell_type": (_json(notebook([dict(code(), cell_type="python")])), "of type 'python', expected code"),
     "missing_source": (_json(notebook([{"cell_type": "code", "metadata": {}, "outputs": []}])),
                        "has a code cell (cell 1) without a source"),
-    "source_numbers": (_json(notebook([code(["x = 1\n", 2])])), "whose source is a list that is not text"),
+    "source_numbers": (_json(notebook([code(["x = 1\n", 2])])), "whose source is a list holding a number, not only text"),
     "deep": (b"[" * 100_000 + b"]" * 100_000, "nested too deeply"),
     "many_cells": (_json(notebook([code()] * 100_000)), "has 100000 cells, more than the 5000"),
     "directory": (lambda path: path.mkdir(), "is a folder, not a notebook file"),
@@ -292,3 +292,11 @@ def test_a_run_over_bad_input_grades_everyone_and_loses_no_one(tmp_path):
     assert "canvas.zip:zoe_late_11_22_00_warmup.ipynb" in json.loads(
         (out / "records" / "zoe__00_warmup.json").read_text())["notebook"]
     assert not (tmp_path / "zed").exists()
+
+
+def test_a_member_that_cannot_be_written_refuses_the_zip(tmp_path):
+    """A notebook member under another notebook member's name (x.ipynb, then x.ipynb/y.ipynb) is refused."""
+    path = make_zip(tmp_path / "odd.zip", [("a/x.ipynb", GOOD), ("a/x.ipynb/y.ipynb", GOOD)])
+    with pytest.raises(ZipRefused, match=r"member 'a/x.ipynb/y.ipynb' collides with another member"):
+        extract_zip(path, tmp_path / "out")
+    assert not (tmp_path / "out").exists()
