@@ -27,7 +27,7 @@ The exercise of a notebook is read from its metadata (written by
 ``particles release``), else from its file name (``..._00_warmup...``), else
 from ``--exercise``, which also overrides both.
 
-Students are compared case-insensitively (``Alice/`` and ``alice.ipynb`` are
+Students are compared case-insensitively, after Unicode normalization (``Alice/`` and ``alice.ipynb`` are
 one student, spelled as the first of the spellings in sorted order). A student
 with several notebooks of one exercise in one place (their own folder, or one
 Canvas submission) gets one graded: the one named exactly ``NN_topic.ipynb``,
@@ -47,6 +47,7 @@ import hashlib
 import json
 import os
 import re
+import unicodedata
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -105,7 +106,13 @@ def _exercise_of(notebook, content, exercises, override=None):
 
 
 def _student_name(text):
+    text = unicodedata.normalize("NFC", text)  # macOS writes names decomposed (NFD), Windows composed
     return re.sub(r"[^\w.@+-]+", "_", text).strip("_") or "submission"
+
+
+def _identity(student):
+    """What two students' names are compared by: compatibility-normalized and case-folded."""
+    return unicodedata.normalize("NFKC", student).casefold()
 
 
 def _preference(unit):
@@ -262,7 +269,7 @@ def find_submissions(paths, exercises, exercise=None, *, workdir=None, limits=DE
     problems, found, seen = [], [], set()
     for given in map(Path, paths):
         for nb, student, source, origin in _candidates(given, problems, workdir, limits):
-            key = (os.path.realpath(nb), student.casefold())
+            key = (os.path.realpath(nb), _identity(student))
             if key in seen:  # the same file given twice: one submission
                 continue
             seen.add(key)
@@ -281,10 +288,10 @@ def find_submissions(paths, exercises, exercise=None, *, workdir=None, limits=DE
             found.append((Unit(student, name, nb, rejected, origin), source))
     spelling = {}
     for unit, _ in sorted(found, key=lambda f: f[0].student):
-        spelling.setdefault(unit.student.casefold(), unit.student)
+        spelling.setdefault(_identity(unit.student), unit.student)
     groups = {}
     for unit, source in found:
-        unit.student = spelling[unit.student.casefold()]
+        unit.student = spelling[_identity(unit.student)]
         groups.setdefault((unit.student, unit.exercise), {}).setdefault(source, []).append(unit)
     units = []
     for (student, name), sources in groups.items():

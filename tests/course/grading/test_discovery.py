@@ -245,3 +245,11 @@ def test_a_zip_is_looked_into_only_when_its_top_folder_holds_students(tmp_path):
     assert sorted(units) == ["uma", "vic", "wes"]
     assert problems == [f"{tmp_path / 'subs' / 'xia.zip'}: a zip in a folder is not opened; give it as a "
                         "SUBMISSION of its own"]
+
+
+def test_names_written_composed_and_decomposed_are_one_student(tmp_path):
+    """José/ as macOS writes it (decomposed) and josé.ipynb (composed) are one student: a conflict."""
+    put(tmp_path / "Jose\u0301" / "00_warmup.ipynb")
+    put(tmp_path / "jos\u00e9.ipynb")
+    units, _ = found([tmp_path])
+    assert list(units) == ["Jos\u00e9"] and "none was graded" in units["Jos\u00e9"].rejected
