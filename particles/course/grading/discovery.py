@@ -278,6 +278,9 @@ def find_submissions(paths, exercises, exercise=None, *, workdir=None, limits=DE
                 content, rejected = read_notebook(nb, limits), ""
             except NotebookRejected as error:
                 content, rejected = None, f"your notebook {Path(origin or nb).name} could not be read: it {error}"
+            except (ValueError, MemoryError) as error:  # never a run stopped by one file
+                content, rejected = None, (f"your notebook {Path(origin or nb).name} could not be read "
+                                           f"({type(error).__name__}: {' '.join(str(error).split())[:200]})")
             name = _exercise_of(nb, content, exercises, exercise)
             if name is None:
                 problems.append(f"{where}: cannot tell which exercise this is; pass --exercise"

@@ -177,6 +177,8 @@ def read_notebook(path, limits=DEFAULT_LIMITS):
     except json.JSONDecodeError as error:
         raise NotebookRejected(f"is not valid JSON ({error.msg} at line {error.lineno}, column {error.colno})") \
             from None
+    except ValueError as error:  # e.g. an integer of more digits than Python converts
+        raise NotebookRejected(f"is not valid JSON ({_one_line(error, 120)})") from None
     except RecursionError:
         raise NotebookRejected("is not a notebook (JSON nested too deeply)") from None
     if not isinstance(notebook, dict):
@@ -327,7 +329,7 @@ def _extract(path, dest, limits):
 
     try:
         archive = zipfile.ZipFile(path)
-    except (OSError, zipfile.BadZipFile, ValueError) as error:
+    except (OSError, zipfile.BadZipFile, ValueError, NotImplementedError, EOFError) as error:
         raise ZipRefused(f"{path}: not a readable zip ({_one_line(error, 120)})") from None
     with archive:
         members = archive.infolist()

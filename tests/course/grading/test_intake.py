@@ -75,6 +75,7 @@ MALFORMED = {
                        "has a code cell (cell 1) without a source"),
     "source_numbers": (_json(notebook([code(["x = 1\n", 2])])), "whose source is a list holding a number, not only text"),
     "deep": (b"[" * 100_000 + b"]" * 100_000, "nested too deeply"),
+    "huge_integer": (b'{"nbformat": 4, "cells": [], "x": ' + b"9" * 10_000 + b"}", "is not valid JSON (Exceeds"),
     "many_cells": (_json(notebook([code()] * 100_000)), "has 100000 cells, more than the 5000"),
     "directory": (lambda path: path.mkdir(), "is a folder, not a notebook file"),
     "fifo": (lambda path: os.mkfifo(path), "is not a regular file"),
