@@ -8,6 +8,8 @@ Modules:
   of a session;
 * :mod:`~particles.course.grading.discovery`: which notebooks are graded, as which student and
   exercise; written answers;
+* :mod:`~particles.course.grading.intake`: what is let in: notebooks checked within limits, zips
+  opened safely;
 * :mod:`~particles.course.grading.expect`: the checks tests use, each failing with a one-line
   reason;
 * :mod:`~particles.course.grading.blame`: whose fault a failure is: the judged function or a failing

@@ -39,7 +39,10 @@ the late-work decision (``late``, :mod:`particles.course.grading.deadlines`).
 ``DIR/records/`` as it is and writes the gradebook and the outputs from all.
 
 Which notebooks are graded, and as which student and exercise, is decided in
-:mod:`particles.course.grading.discovery`.
+:mod:`particles.course.grading.discovery`; zips are opened, and notebooks
+checked before they are graded, in :mod:`particles.course.grading.intake`. A
+notebook rejected there is never given to a session: its record fails every
+test of the exercise's catalog with the one-line reason.
 """
 
 import hashlib
@@ -161,11 +164,20 @@ def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None, v
         notes.append(answers_note(written))
     layers = session.isolation or {}
     return SubmissionRecord(
-        student=unit.student, exercise=unit.exercise, notebook=str(unit.notebook), seed=seed,
+        student=unit.student, exercise=unit.exercise, notebook=unit.where, seed=seed,
         seconds=round(session.seconds if session.complete else seconds, 2), tests=records, notes=notes,
         written_answers=written, grader_status=status, complete=session.complete, isolation=layers,
         sandbox=isolation_module.describe(layers), notebook_sha256=notebook_digest(unit.notebook),
         tests_version=version)
+
+
+def _rejected(unit, tests):
+    """The record of a unit discovery rejected: every test of `tests` failed with its reason; never resumed."""
+    return SubmissionRecord(
+        student=unit.student, exercise=unit.exercise, notebook=unit.where, seconds=0.0,
+        tests=[TestRecord.from_dict(t).failed(unit.rejected) for t in tests],
+        notes=[f"Not graded: {unit.rejected}"], grader_status=None, complete=True,
+        sandbox="not run: the notebook was not graded")
 
 
 def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, memory_mb=None, private=(),
@@ -304,13 +316,18 @@ def _batches(units, jobs, largest=20):
 def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=None, time_limit=None,
           memory_mb=None, root=None, private=(), hidden_visibility="after_published", python=None,
           gradescope=None, progress=None, isolation="auto", resume=False, audit_hook=True, rubric=(),
-          course=None, times=None, metadata=None, students=None):
+          course=None, times=None, metadata=None, students=None, limits=None):
     """Grade submissions; write results.json and feedback per student and a gradebook.
 
     Parameters
     ----------
     paths : sequence of path
-        Notebooks, or folders of notebooks (see :mod:`particles.course.grading.discovery`).
+        Notebooks, folders of notebooks, zips of them (LMS exports; see
+        :mod:`particles.course.grading.discovery`). A notebook the grader does
+        not read (:func:`particles.course.grading.intake.read_notebook`), or
+        several notebooks of one student and exercise from different places,
+        get a record where every test failed with the one-line reason, and
+        are among the ``problems``.
     out : path, optional
         Output folder: ``gradebook.csv``, ``<student>/results.json``,
         ``<student>/feedback.md`` and ``<student>/feedback.html`` (with the
@@ -367,12 +384,16 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         Regrade only these students' notebooks (needs `out` with the records of an earlier run): every
         other record in ``out/records/`` is kept as it is, and the gradebook and every student's
         outputs are written again from all the records.
+    limits : particles.course.grading.intake.Limits, optional
+        What a notebook and a zip may hold (default
+        :data:`~particles.course.grading.intake.DEFAULT_LIMITS`).
 
     Returns
     -------
     dict
         ``students`` (student -> list of per-exercise results), ``exercises``
-        (names graded, in order), ``problems`` (notebooks not graded),
+        (names graded, in order), ``problems`` (one line per notebook not
+        graded, zip refused, link not followed...),
         ``isolation`` (one line: the walls the workers had), ``resumed``
         (how many records were kept from an earlier run), ``kept`` (how
         many records of other students `students` kept as they were).
@@ -414,107 +435,122 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
     plan = isolation if isinstance(isolation, isolation_module.Plan) else isolation_module.plan(isolation)
     isolation_module.protect_this_process()
     before = isolation_module.library_checksum()  # everything the driver needs is imported by now
-    units, problems = find_submissions(paths, list(tests), exercise)
-    written = WrittenGrades.load(rubric, units, root, [exercise] if exercise else [])  # a bad rubric: no grading
-    others = {}
-    if students is not None:
-        units, others = regrade_split(Path(out) / "records", units, students)
-    if out is not None:
-        out = Path(out)
-        (out / "logs").mkdir(parents=True, exist_ok=True)
-    # no worker may read the submissions (a classmate's notebook) or what grading writes; a worker gets
-    # its own code from the grader, so it never needs to read its notebook either
-    private = [*map(str, private), *(str(Path(p).resolve()) for p in paths if Path(p).exists())]
-    private += [str(out.resolve())] if out is not None else []
-    options = {"public_only": bool(public_only), "seed": seed, "time_limit": time_limit, "memory_mb": memory_mb,
-               "audit_hook": bool(audit_hook)}
-    store = RecordStore(out / "records", options) if out is not None else None
-    done = dict(others)
-    by_key = {(u.student, u.exercise): u for u in units}
+    with tempfile.TemporaryDirectory(prefix="particles-intake-") as intake:  # the zips' notebooks, while graded
+        units, problems = find_submissions(paths, list(tests), exercise, workdir=intake,
+                                           **({"limits": limits} if limits is not None else {}))
+        written = WrittenGrades.load(rubric, units, root, [exercise] if exercise else [])  # a bad rubric: no grading
+        others = {}
+        if students is not None:
+            units, others = regrade_split(Path(out) / "records", units, students)
+        if out is not None:
+            out = Path(out)
+            (out / "logs").mkdir(parents=True, exist_ok=True)
+        # no worker may read the submissions (a classmate's notebook) or what grading writes; a worker gets
+        # its own code from the grader, so it never needs to read its notebook either
+        private = [*map(str, private), *(str(Path(p).resolve()) for p in paths if Path(p).exists())]
+        private += [str(out.resolve())] if out is not None else []
+        private.append(str(Path(intake).resolve()))
+        options = {"public_only": bool(public_only), "seed": seed, "time_limit": time_limit, "memory_mb": memory_mb,
+                   "audit_hook": bool(audit_hook)}
+        store = RecordStore(out / "records", options) if out is not None else None
+        done = dict(others)
+        by_key = {(u.student, u.exercise): u for u in units}
 
-    def late(result):  # the late-work decision, from the course file and the submission's time
-        when, source = submitted.of(by_key[(result.student, result.exercise)])
-        return apply_late(result, deadlines, when, source, submitted.aliases())
+        def late(result):  # the late-work decision, from the course file and the submission's time
+            when, source = submitted.of(by_key[(result.student, result.exercise)])
+            return apply_late(result, deadlines, when, source, submitted.aliases())
 
-    if resume:
-        for unit in units:
-            kept = store.load(unit, versions[unit.exercise])
-            if kept is not None:
-                decided = kept.late
-                done[(unit.student, unit.exercise)] = late(kept)
-                if kept.late != decided:  # a new deadline or extension: the same grade, a new decision
-                    store.save(kept)
-    todo = [u for u in units if (u.student, u.exercise) not in done]
-    lock = threading.Lock()
+        if resume:
+            for unit in units:
+                kept = store.load(unit, versions[unit.exercise]) if not unit.rejected else None
+                if kept is not None:
+                    kept.notebook = unit.where
+                    decided = kept.late
+                    done[(unit.student, unit.exercise)] = late(kept)
+                    if kept.late != decided:  # a new deadline or extension: the same grade, a new decision
+                        store.save(kept)
+        todo = [u for u in units if (u.student, u.exercise) not in done and not u.rejected]
+        lock = threading.Lock()
 
-    def finished(results):
-        with lock:
-            for result in results:
-                late(result)
-                done[(result.student, result.exercise)] = result
-                if store is not None:
-                    store.save(result)
-            if out is not None:  # what a stopped run leaves is already usable
-                _write_outputs(out, done, tests, hidden_visibility, students=[r.student for r in results],
-                               written=written)
-        if progress is not None:
-            for result in results:
-                progress(result)
+        def finished(results):
+            with lock:
+                for result in results:
+                    late(result)
+                    done[(result.student, result.exercise)] = result
+                    if store is not None:
+                        store.save(result)
+                if out is not None:  # what a stopped run leaves is already usable
+                    _write_outputs(out, done, tests, hidden_visibility, students=[r.student for r in results],
+                                   written=written)
+            if progress is not None:
+                for result in results:
+                    progress(result)
 
-    def work(batch):
-        k = batches.index(batch)
-        log = out / "logs" / f"batch{k:03d}-{batch[0].exercise}.log" if out is not None else None
-        seeds = [seed if seed is not None else secrets.randbelow(2**31) for _ in batch]
-        results = grade_batch(batch, root, seeds=seeds, public_only=public_only, time_limit=time_limit,
-                              memory_mb=memory_mb, private=private, python=python, log=log, isolation=plan,
-                              audit_hook=audit_hook)
-        if len(batch) > 1:  # a session that stopped early: grade its unfinished notebooks alone
-            for i, (unit, result) in enumerate(zip(batch, results)):
-                if not result.complete:
-                    retry_log = out / "logs" / f"{unit.student}-{unit.exercise}.log" if out is not None else None
-                    results[i] = grade_unit(unit, root, seed=seeds[i], public_only=public_only,
-                                            time_limit=time_limit, memory_mb=memory_mb, private=private,
-                                            python=python, log=retry_log, isolation=plan, audit_hook=audit_hook)
-        finished(results)
-        return results
+        def work(batch):
+            k = batches.index(batch)
+            log = out / "logs" / f"batch{k:03d}-{batch[0].exercise}.log" if out is not None else None
+            seeds = [seed if seed is not None else secrets.randbelow(2**31) for _ in batch]
+            results = grade_batch(batch, root, seeds=seeds, public_only=public_only, time_limit=time_limit,
+                                  memory_mb=memory_mb, private=private, python=python, log=log, isolation=plan,
+                                  audit_hook=audit_hook)
+            if len(batch) > 1:  # a session that stopped early: grade its unfinished notebooks alone
+                for i, (unit, result) in enumerate(zip(batch, results)):
+                    if not result.complete:
+                        retry_log = out / "logs" / f"{unit.student}-{unit.exercise}.log" if out is not None else None
+                        results[i] = grade_unit(unit, root, seed=seeds[i], public_only=public_only,
+                                                time_limit=time_limit, memory_mb=memory_mb, private=private,
+                                                python=python, log=retry_log, isolation=plan, audit_hook=audit_hook)
+            finished(results)
+            return results
 
-    batches = _batches(todo, jobs)
-    with ThreadPoolExecutor(max_workers=jobs) as pool:
-        list(pool.map(work, batches))
-    results = [done[(u.student, u.exercise)] for u in units]
-    graded = {}
-    for result in results:
-        graded.setdefault(result.student, []).append(result)
-    exercises = [name for name in tests if any(u.exercise == name for u in units)]
-    layers = [r.isolation for r in results if r.isolation]
-    summary = {"students": graded, "exercises": exercises, "problems": problems,
-               "isolation": isolation_module.describe(layers[0] if layers else {}) if results else
-               f"planned: {plan.to_option()}", "resumed": len(units) - len(todo), "kept": len(others)}
-    changed = isolation_module.library_changes(before)
-    if out is not None:
-        _write_outputs(out, done, tests, hidden_visibility, written=written)
+        catalogs = {}
+        for unit in units:  # a notebook not graded gets its record at once: 0, saying why
+            if unit.rejected:
+                if unit.exercise not in catalogs:
+                    try:
+                        catalogs[unit.exercise] = catalog(root, unit.exercise, public_only, python)
+                    except RuntimeError as error:
+                        catalogs[unit.exercise] = []
+                        problems.append(str(error))
+                finished([_rejected(unit, catalogs[unit.exercise])])
+        batches = _batches(todo, jobs)
+        with ThreadPoolExecutor(max_workers=jobs) as pool:
+            list(pool.map(work, batches))
+        results = [done[(u.student, u.exercise)] for u in units]
+        kept = sum(1 for u in units if not u.rejected) - len(todo)
+        graded = {}
+        for result in results:
+            graded.setdefault(result.student, []).append(result)
+        exercises = [name for name in tests if any(u.exercise == name for u in units)]
+        layers = [r.isolation for r in results if r.isolation]
+        summary = {"students": graded, "exercises": exercises, "problems": problems,
+                   "isolation": isolation_module.describe(layers[0] if layers else {}) if results else
+                   f"planned: {plan.to_option()}", "resumed": kept, "kept": len(others)}
+        changed = isolation_module.library_changes(before)
+        if out is not None:
+            _write_outputs(out, done, tests, hidden_visibility, written=written)
+            if changed:
+                (out / "LIBRARY-CHANGED.txt").write_text(
+                    "The installed particles library changed while these submissions were graded:\n"
+                    + "".join(f"  {name}\n" for name in changed) + "Do not trust these grades.\n")
+        if gradescope is not None:
+            if not results and exercise is not None:  # nothing gradable was submitted: every test fails, saying why
+                why = "no notebook for this exercise was found in your submission" if not problems else problems[0]
+                tests_of = catalog(root, exercise, public_only, python)
+                results = [SubmissionRecord(student="submission", exercise=exercise, sandbox=summary["isolation"],
+                                            tests=[TestRecord.from_dict(t).failed(why) for t in tests_of])]
+            written.apply(results)
+            data = gradescope_results("submission", results, hidden_visibility, manual=written.manual())
+            if problems:
+                data["output"] = "\n".join([data["output"], *problems]).strip()
+            if changed:  # a compromised container: no score is better than a forged one
+                data = {"score": 0, "output": "The autograder's own files changed while grading this submission; "
+                        "it was not graded. Please tell the instructors.", "tests": [], "visibility": "visible"}
+            Path(gradescope).parent.mkdir(parents=True, exist_ok=True)
+            write_json(gradescope, data)
         if changed:
-            (out / "LIBRARY-CHANGED.txt").write_text(
-                "The installed particles library changed while these submissions were graded:\n"
-                + "".join(f"  {name}\n" for name in changed) + "Do not trust these grades.\n")
-    if gradescope is not None:
-        if not results and exercise is not None:  # nothing gradable was submitted: every test fails, saying why
-            why = "no notebook for this exercise was found in your submission" if not problems else problems[0]
-            tests_of = catalog(root, exercise, public_only, python)
-            results = [SubmissionRecord(student="submission", exercise=exercise, sandbox=summary["isolation"],
-                                        tests=[TestRecord.from_dict(t).failed(why) for t in tests_of])]
-        written.apply(results)
-        data = gradescope_results("submission", results, hidden_visibility, manual=written.manual())
-        if problems:
-            data["output"] = "\n".join([data["output"], *problems]).strip()
-        if changed:  # a compromised container: no score is better than a forged one
-            data = {"score": 0, "output": "The autograder's own files changed while grading this submission; "
-                    "it was not graded. Please tell the instructors.", "tests": [], "visibility": "visible"}
-        Path(gradescope).parent.mkdir(parents=True, exist_ok=True)
-        write_json(gradescope, data)
-    if changed:
-        raise LibraryChanged(changed, summary)
-    return summary
+            raise LibraryChanged(changed, summary)
+        return summary
 
 
 _written = {}  # (folder, hidden_visibility) -> digest of the results its files were last written from

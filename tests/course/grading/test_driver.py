@@ -181,13 +181,14 @@ def test_late_work_is_penalized_and_one_student_is_regraded_alone(tmp_path):
         records["alice"]["late"]["reason"]
     bob = records["bob"]["late"]
     assert (bob["days_late"], bob["penalty"], bob["source"]) == (1, 1.1, "the times file")
-    assert bob["reason"].startswith("submitted 10 hours after the deadline 2026-10-01 23:59 +01:00: -10% of 11")
+    assert bob["reason"].startswith("submitted 10 hours after the deadline 2026-10-01 23:59 +01:00: "
+                                    "-10% of the exercise's points")
     assert {r["tests_version"] for r in records.values()} == {versions.tests_version(ROOT, "00_warmup")}
     assert "alice,11,11,11" in (out / "gradebook.csv").read_text()
     assert "bob,9.9,9.9,11" in (out / "gradebook.csv").read_text()
     feedback = (out / "bob" / "feedback.md").read_text()
     assert "**Total: 9.9 / 11 points**" in feedback
-    assert "Late: raw score 11, penalty -1.1 (submitted 10 hours" in feedback
+    assert "Late: raw score 11, penalty -1.1 of 11 points (submitted 10 hours" in feedback
     assert "Graded by tests version tests=" in feedback
     assert "Graded by tests version" in (out / "bob" / "feedback.html").read_text()
     results = json.loads((out / "bob" / "results.json").read_text())
