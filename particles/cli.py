@@ -122,6 +122,11 @@ def _grade(args):
     if not summary["students"] and not args.gradescope:
         print("particles grade: no notebooks were graded", file=sys.stderr)
         return 1
+    if summary.get("rejected"):  # every record is written, but someone must look at these
+        print(f"particles grade: {len(summary['rejected'])} notebook(s) scored 0 without being run (see "
+              "'not graded' above): a malformed notebook, or one student's notebooks from two places",
+              file=sys.stderr)
+        return 1
     return 0
 
 

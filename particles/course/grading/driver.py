@@ -525,7 +525,8 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         layers = [r.isolation for r in results if r.isolation]
         summary = {"students": graded, "exercises": exercises, "problems": problems,
                    "isolation": isolation_module.describe(layers[0] if layers else {}) if results else
-                   f"planned: {plan.to_option()}", "resumed": kept, "kept": len(others)}
+                   f"planned: {plan.to_option()}", "resumed": kept, "kept": len(others),
+                   "rejected": [u.where for u in units if u.rejected]}
         changed = isolation_module.library_changes(before)
         if out is not None:
             _write_outputs(out, done, tests, hidden_visibility, written=written)

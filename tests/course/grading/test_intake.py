@@ -271,7 +271,8 @@ def test_a_run_over_bad_input_grades_everyone_and_loses_no_one(tmp_path):
     done = subprocess.run([sys.executable, "-m", "particles.cli", "grade", str(subs), str(lms), str(bomb),
                            "--out", str(out), "--exercise", "00_warmup", "--seed", "3"],
                           cwd=ROOT, capture_output=True, text=True, timeout=600)
-    assert done.returncode == 0, done.stderr
+    assert done.returncode == 1, done.stderr  # every record written, and the rejected ones said loudly
+    assert f"{len(bad) + 1} notebook(s) scored 0 without being run" in done.stderr
     with open(out / "gradebook.csv", newline="") as stream:
         rows = {row["student"]: row for row in csv.DictReader(stream)}
     assert sorted(rows) == sorted(["good", "zoe", "Alice", *bad])
