@@ -38,8 +38,9 @@ with a warning). The choice is made at each force evaluation, so
 order wherever that costs nothing (springs, bending and XPBD give the same
 bits as NumPy), and sums per particle in a fixed order what NumPy scatters
 with ``np.bincount``, so the two agree to about 1e-15 relative (tested to
-1e-12 on every problem of the force contract and on larger ones,
-``tests/library/backends/test_backends.py``).
+1e-12 on every problem of the force contract,
+``tests/library/backends/test_force_contract.py``, and on larger ones,
+``tests/library/backends/test_compiled.py``).
 
 **Determinism and threads.** Loops of 16k items or more run on numba's
 threads (``NUMBA_NUM_THREADS``, or :func:`numba.set_num_threads`); shorter

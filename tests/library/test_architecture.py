@@ -220,9 +220,18 @@ def test_every_test_says_what_it_checks():
 PACKAGES = sorted(name.split(".")[1] for name, path in MODULES.items()
                   if path.name == "__init__.py" and name.count(".") == 1)
 ROOT_LIMIT, LINE_LIMIT = 15, 600
-# Tests of a concept that spans a package rather than one module (besides test_<package>.py);
-# test_bench_scripts: the set-ups of the scripts in bench/, built without timing them.
-CONCEPT_TESTS = {"test_architecture", "test_force_contract", "test_md_nist", "test_bench_scripts"}
+# Tests of a concept that spans a package rather than one module (a file named after a whole package is not
+# one: its tests belong in the files of the modules they test), each with the reason it is one.
+CONCEPT_TESTS = {
+    "test_architecture": "the library's layout, across every package",
+    "test_bench_scripts": "the set-ups of the scripts in bench/, built without timing them",
+    "test_force_contract": "the contract every Force subclass keeps (forces/), and again on each backend (backends/)",
+    "test_md_nist": "NIST's Lennard-Jones liquid, reproduced with the md package's lattice, thermostats and statistics",
+    "test_switch": "the backend switch of particles/backends/__init__.py (numpy, numba, auto, the global choice)",
+    "test_registry": "the demo registry of particles/demos/__init__.py (DEMOS, register, run_demo), over every demo",
+    "test_docstrings": "the numpydoc sections of the demos' and effects' public functions, over several packages",
+    "test_solver_contract": "what both implicit solvers (BaraffWitkin, Prefactored) promise, each test over both",
+}
 
 
 def test_the_root_holds_only_what_every_area_shares():
@@ -256,7 +265,7 @@ def test_each_package_docstring_is_its_map(package):
 
 
 def test_library_tests_mirror_the_packages():
-    """tests/library/<package>/test_<module>.py tests particles/<package>/<module>.py (or the package, or a concept)."""
+    """tests/library/<package>/test_<module>.py tests particles/<package>/<module>.py (or a concept test)."""
     tests = ROOT / "tests" / "library"
     wrong = []
     for path in sorted(tests.rglob("test_*.py")):
@@ -265,11 +274,17 @@ def test_library_tests_mirror_the_packages():
         stem = path.stem
         if package != "particles" and not (package in MODULES and MODULES[package].name == "__init__.py"):
             wrong.append(f"{path.relative_to(ROOT)}: no package {package}")
-        elif not (f"{package}.{stem[5:]}" in MODULES or stem[5:] == package.rpartition(".")[2] or stem in CONCEPT_TESTS):
+        elif not (f"{package}.{stem[5:]}" in MODULES or stem in CONCEPT_TESTS):
             wrong.append(f"{path.relative_to(ROOT)}: no module {package}.{stem[5:]}")
         elif not (path.parent / "__init__.py").exists():
             wrong.append(f"{path.relative_to(ROOT)}: no __init__.py beside it")
     assert wrong == []
+
+
+def test_every_concept_test_exists():
+    """Each name of CONCEPT_TESTS is the name of a test file of tests/library/ (no allowance outlives its file)."""
+    stems = {path.stem for path in (ROOT / "tests" / "library").rglob("test_*.py")}
+    assert sorted(set(CONCEPT_TESTS) - stems) == []
 
 
 # Tests of the course tools at tests/course/ itself: journeys through several packages.

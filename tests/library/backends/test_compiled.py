@@ -1,6 +1,12 @@
-"""The compiled symplectic Euler step of a mass-spring system (particles.backends.compiled.CompiledStep).
+"""The numba drivers (particles.backends.compiled): the compiled forces, and the compiled symplectic Euler step.
 
-With the springs on numba, symplectic Euler given a system's derivative (in
+The compiled forces on problems larger than the force contract's (a 40^2
+cloth, an 864-particle Lennard-Jones liquid in and out of a box, N-body,
+a long chain's bending, distance_pass) agree with NumPy to 1e-12 and give
+the same bits on one thread, on two, and serially.
+
+The compiled step (:class:`particles.backends.compiled.CompiledStep`): with
+the springs on numba, symplectic Euler given a system's derivative (in
 :meth:`ParticleSystem.run`, in a wrapper, or directly) takes the whole step
 in one compiled pass. These tests compare its runs with the NumPy runs (1e-12 relative) on
 cloths, strings and hair, with every kind of force beside the springs, with
@@ -16,22 +22,19 @@ import pytest
 from particles import backends
 from particles.constraints import ProvotConstraint
 from particles.errors import SimulationDiverged
-from particles.forces import Attractor, Damping, Field, Force, Vortex, Wind
+from particles.forces import Attractor, Damping, Field, Force, LennardJones, NBodyGravity, Vortex, Wind
 from particles.integrators import symplectic_euler
 from particles.massspring import cloth, hair, string
+from particles.md import fcc_lattice
 from particles.springs import Bending, Springs
+from particles.xpbd import XPBD, distance_pass
+
+from .helpers import _close, needs_numba
 
 pytestmark = pytest.mark.skipif("numba" not in backends.available(),
                                 reason="numba is not installed (pip install 'particles[fast]')")
 
 H = 1e-4  # s
-
-
-def _close(a, b, rtol=1e-12):
-    """Arrays equal to `rtol` relative to their largest entry."""
-    a, b = np.asarray(a), np.asarray(b)
-    assert a.shape == b.shape
-    assert np.abs(a - b).max(initial=0.0) <= rtol * max(np.abs(a).max(initial=0.0), 1e-300)
 
 
 def _shaken(system, seed=0):
@@ -349,3 +352,114 @@ def test_hooks_see_the_compiled_rows_and_the_run_ends_in_fortran_order():
     numpy_system, seen = run("numpy")
     assert not any(seen) and numpy_system.X.flags.f_contiguous
     _close(numpy_system.X, compiled_system.X)
+
+
+def _cloth_state(n, seed=0):
+    c = cloth(n, n, kd=0.05)
+    X = c.state()
+    rng = np.random.default_rng(seed)
+    X[:, 0] += rng.normal(scale=0.05 / n, size=X[:, 0].shape)
+    X[:, 1] = rng.normal(scale=0.1, size=X[:, 1].shape)
+    return c, X
+
+
+@needs_numba
+def test_a_cloth_step_agrees_and_is_the_same_every_time():
+    """A 40^2 cloth (4.6k damped springs): the derivative agrees to 1e-12, repeated calls give the same bits."""
+    c, X = _cloth_state(40)
+    with backends.using("numpy"):
+        reference = c.derivative(X, 0.0)
+    with backends.using("numba"):
+        first = c.derivative(X, 0.0)
+        np.testing.assert_array_equal(c.derivative(X, 0.0), first)
+    _close(reference, first)
+
+
+def _liquid(cells=(6, 6, 6), seed=1):
+    x, box = fcc_lattice(cells, 0.86)
+    return x + np.random.default_rng(seed).uniform(-0.1, 0.1, x.shape), box
+
+
+@needs_numba
+@pytest.mark.parametrize("periodic", [True, False], ids=["periodic", "open"])
+def test_lennard_jones_on_a_liquid_agrees_with_numpy(periodic):
+    """864 particles at rho* = 0.86 (about 34k listed pairs): forces to 1e-12, the virial to 1e-12."""
+    x, box = _liquid()
+    out = {}
+    for backend in ("numpy", "numba"):
+        lj = LennardJones.from_epsilon_sigma(skin=0.3, box=box if periodic else None, backend=backend)
+        out[backend] = lj(x), lj.last_virial
+    _close(out["numpy"][0], out["numba"][0])
+    assert out["numba"][1] == pytest.approx(out["numpy"][1], rel=1e-12)
+
+
+@needs_numba
+def test_lennard_jones_follows_its_list_when_particles_move():
+    """Across list rebuilds (particles moving, unwrapped positions leaving the box) both backends agree."""
+    x, box = _liquid(seed=3)
+    lj = {b: LennardJones.from_epsilon_sigma(skin=0.2, box=box, backend=b) for b in ("numpy", "numba")}
+    rng = np.random.default_rng(4)
+    for _ in range(4):  # a loop over moves: some reuse the list, some rebuild it
+        x = x + rng.normal(scale=0.06, size=x.shape) + np.array([0.5, 0.0, 0.0]) * box
+        _close(lj["numpy"](x), lj["numba"](x))
+    assert lj["numba"].neighbor_list.builds == lj["numpy"].neighbor_list.builds > 1
+
+
+@needs_numba
+@pytest.mark.parametrize("d", [2, 3])
+def test_nbody_and_bending_agree_with_numpy(d):
+    """N-body gravity (300 particles) and a long chain's bending agree to 1e-12."""
+    rng = np.random.default_rng(5)
+    x, m = rng.normal(size=(300, d)), rng.uniform(0.5, 2.0, 300)
+    triples = np.stack([np.arange(298), np.arange(1, 299), np.arange(2, 300)], axis=1)
+    kb = rng.uniform(0.5, 1.0, 298)
+    for make in (lambda b: NBodyGravity(G=2.0, softening=0.05, backend=b),
+                 lambda b: Bending(triples, kb=kb, rest_angle=0.2, backend=b)):
+        _close(make("numpy")(x, m=m), make("numba")(x, m=m))
+
+
+@needs_numba
+def test_distance_pass_agrees_with_numpy_with_given_groups():
+    """distance_pass with colour groups given as lists of rows, and as one Jacobi pass, on both backends."""
+    rng = np.random.default_rng(6)
+    x = rng.normal(size=(6, 3))
+    ij = [[0, 1], [2, 3], [1, 2], [3, 4], [4, 5]]
+    w = np.array([0.0, 1.0, 0.5, 2.0, 1.0, 1.0])
+    for groups in ([[0, 1, 4], [2, 3]], None):
+        out = [distance_pass(x, w, ij, 1.0, 0.01, np.zeros(5), groups=groups, backend=b) for b in ("numpy", "numba")]
+        _close(out[0][0], out[1][0])
+        _close(out[0][1], out[1][1])
+
+
+@needs_numba
+def test_results_do_not_depend_on_the_number_of_threads(monkeypatch):
+    """Springs, bending, Lennard-Jones, N-body and XPBD: the same bits on one thread, on two, and serial.
+
+    (For springs the serial form is a one-pass scatter, the parallel one forces per spring then a gather.)
+    """
+    import numba
+
+    from particles.backends import _kernels, compiled
+
+    c, X = _cloth_state(32)
+    x, box = _liquid()
+    rng = np.random.default_rng(7)
+    xn, m = rng.normal(size=(200, 3)), rng.uniform(0.5, 2.0, 200)
+    chain = np.stack([np.arange(198), np.arange(1, 199), np.arange(2, 200)], axis=1)
+    results = []
+    before = numba.get_num_threads()
+    try:
+        for threads, parallel_min in ((1, 0), (min(2, numba.config.NUMBA_NUM_THREADS), 0), (1, 10**9)):
+            monkeypatch.setattr(_kernels, "PARALLEL_MIN", parallel_min)  # 0: every loop parallel; 10**9: none
+            monkeypatch.setattr(compiled, "SPRING_THREADS", 1)  # springs too: the two-pass form, then one pass
+            numba.set_num_threads(threads)
+            with backends.using("numba"):
+                lj = LennardJones.from_epsilon_sigma(skin=0.3, box=box)
+                xpbd = XPBD.from_system(_cloth_state(32)[0], substeps=2)
+                results.append([c.derivative(X, 0.0), lj(x), np.array(lj.last_virial), xpbd(None, X, 0.0, 0.01),
+                                NBodyGravity()(xn, m=m), Bending(chain, kb=0.5)(xn)])
+    finally:
+        numba.set_num_threads(before)
+    for runs in zip(*results):  # a loop over the quantities: each the same in the three runs
+        for other in runs[1:]:
+            np.testing.assert_array_equal(other, runs[0])

@@ -13,17 +13,12 @@ from particles import backends
 from particles.implicit import Prefactored
 from particles.massspring import cloth, string
 
+from .helpers import _close
+
 pytestmark = pytest.mark.skipif("numba" not in backends.available(),
                                 reason="numba is not installed (pip install 'particles[fast]')")
 
 H = 1 / 30
-
-
-def _close(a, b, rtol=1e-12):
-    """Arrays equal to `rtol` relative to their largest entry."""
-    a, b = np.asarray(a), np.asarray(b)
-    assert a.shape == b.shape
-    assert np.abs(a - b).max(initial=0.0) <= rtol * max(np.abs(a).max(initial=0.0), 1e-300)
 
 
 SYSTEMS = [pytest.param(lambda: cloth(12, 10, scaling="physical", stretch_modulus=5000.0, damping=0.1), id="cloth-3d"),

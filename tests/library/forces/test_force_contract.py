@@ -16,10 +16,9 @@ import numpy as np
 import pytest
 
 import particles
-from particles.effects import Boids, Containment
-from particles.forces import (Attractor, Damping, Field, Force, Gravity, LennardJones, NBodyGravity, Vortex,
-                              Wind)
 from particles.constraints import RigidRods
+from particles.effects import Boids, Containment
+from particles.forces import Attractor, Damping, Field, Force, Gravity, LennardJones, NBodyGravity, Vortex, Wind
 from particles.springs import Bending, Clamp, Springs
 
 N = 12  # particles of every test configuration
@@ -174,3 +173,25 @@ def test_declared_independence_of_velocity_and_time_holds(case, d):
         np.testing.assert_array_equal(case.make(x)(x, 3.0 * v + 1.0, t, m), F)
     if not force.uses_time:
         np.testing.assert_array_equal(case.make(x)(x, v, t + 1.7, m), F)
+
+
+def test_forces_do_not_modify_inputs():
+    """x and v are read, never written."""
+    rng = np.random.default_rng(0)
+    x, v = rng.normal(size=(30, 3)), rng.normal(size=(30, 3))
+    x.setflags(write=False)
+    v.setflags(write=False)
+    for force in [Gravity([0, 0, -1]), Damping(1.0), Wind([1, 0, 0], gust=0.3), Attractor([0, 0, 0], 1.0),
+                  Vortex([0, 0, 0], 1.0), NBodyGravity(softening=0.1), LennardJones.from_epsilon_sigma()]:
+        force(x, v, 0.5)
+
+
+def test_position_only_forces_say_so():
+    """Forces that ignore velocity and time declare it (the run may reuse them); damping does not."""
+    lj = LennardJones.from_epsilon_sigma()
+    assert not lj.uses_velocity and not lj.uses_time
+    assert not Gravity([0, -1]).uses_velocity and not NBodyGravity().uses_time
+    assert Damping(1.0).uses_velocity and not Damping(1.0).uses_time
+    assert Wind([1, 0], gust=0.5).uses_time and not Wind([1, 0]).uses_time
+    assert Attractor(lambda t: [t, 0.0], 1.0).uses_time and not Attractor([0, 0], 1.0).uses_time
+    assert not Field(lambda x, t: x).uses_velocity and Field(lambda x, t: x).uses_time

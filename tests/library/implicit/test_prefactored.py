@@ -1,4 +1,9 @@
-"""The prefactorized solver's backends (NumPy, numba, auto) and the configurations of bench/bench_implicit.py.
+"""The prefactorized solver (particles.implicit.prefactored): its residual rule, its backends, the bench's cases.
+
+With the residual rule (the default) a step iterates until the gradient is
+small: the cloth falls like backward Euler and settles at relax()'s
+equilibrium, where ten fixed iterations fall short; a residual out of reach
+raises ConvergenceError.
 
 Both backends run the same Anderson-accelerated iteration; the compiled one
 replaces the local step, the triangular solves and the residual's norm,
@@ -18,9 +23,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from particles import backends
-from particles.implicit import Prefactored
+from particles import ConvergenceError, backends
+from particles.implicit import BaraffWitkin, Prefactored, relax
 from particles.massspring import cloth
+
+from .helpers import energy, readme_cloth, small_cloth, stiff_naive_cloth
 
 NUMBA = pytest.mark.skipif("numba" not in backends.available(),
                            reason="numba is not installed (pip install 'particles[fast]')")
@@ -135,3 +142,65 @@ def test_bench_configurations_honour_the_strain_criterion(modulus):
     strain = max(c.max_strain(x) for x in X)
     assert 0.0 < strain <= target
     assert t[-1] == pytest.approx(bench.T) and len(solver.counts) == round(bench.T / h)
+
+
+def test_prefactored_damps_like_implicit_euler():
+    """With the residual rule the prefactorized cloth falls like backward Euler; 10 fixed iterations hold it back."""
+    h, centre = 1 / 30, readme_cloth(16).points["center"]
+    drops = {}
+    for name, make in (("implicit Euler", lambda c: BaraffWitkin(c, linear_solver="direct", newton_iterations=4)),
+                       ("residual", lambda c: Prefactored(c, h)), ("10 iterations", lambda c: Prefactored(c, h, iterations=10))):
+        c = readme_cloth(16)
+        c.run(0.5, h, method=make(c))
+        drops[name] = -c.X[centre, 0, 2]
+    assert drops["residual"] == pytest.approx(drops["implicit Euler"], rel=0.02)
+    assert drops["10 iterations"] < 0.5 * drops["implicit Euler"]
+
+
+def test_prefactored_settles_at_the_static_equilibrium():
+    """A hanging stiff curtain run with the residual rule rests at relax()'s strain; 10 fixed iterations stop short."""
+    rest = cloth(16, 16, scaling="physical", areal_density=0.2, stretch_modulus=5000.0)
+    relax(rest, h=0.2)
+    strains = {}
+    for iterations in (None, 10):
+        c = cloth(16, 16, scaling="physical", areal_density=0.2, stretch_modulus=5000.0)
+        c.run(1.0, 1 / 30, method=Prefactored(c, 1 / 30, iterations=iterations))
+        strains[iterations] = c.max_strain()
+    assert strains[None] == pytest.approx(rest.max_strain(), rel=0.01)
+    assert strains[10] > 2 * rest.max_strain()
+
+
+def test_prefactored_reports_a_residual_it_cannot_reach():
+    """A step whose residual does not reach tol within max_iterations raises ConvergenceError."""
+    c = readme_cloth(16)
+    solver = Prefactored(c, 1 / 30, max_iterations=5)
+    with pytest.raises(ConvergenceError, match="did not reach tol = 0.1 within max_iterations = 5"):
+        solver(None, c.X, 0.0, 1 / 30)
+    assert solver.counts == [5]
+
+
+def test_prefactored_never_gains_energy_overall():
+    """Few local/global iterations: single steps may wobble, the energy never exceeds its start."""
+    c = stiff_naive_cloth(plane="horizontal")
+    t, X = c.run(2.0, 1 / 30, method=Prefactored(c, 1 / 30, iterations=10))
+    E = np.array([energy(c, Xk) for Xk in X])
+    assert E.max() <= E[0] + 1e-9 and E[-1] < E[0] - 1.0
+
+
+def test_prefactored_refactorizes_for_a_new_step():
+    """Called with another h, the prefactorized solver builds and factorizes M + h^2 L again."""
+    c = small_cloth()
+    solver = Prefactored(c, 0.01)
+    solver(None, c.X, 0.0, 0.02)
+    assert solver.h == 0.02
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"max_iterations": 0}, "max_iterations must be an integer >= 1, got 0"),
+    ({"anderson": -1}, "anderson must be an integer >= 0, got -1"),
+    ({"tol": -1.0}, "tol must be"),
+])
+def test_prefactored_rejects_bad_options(options, message):
+    """The residual rule's options are checked and named in the error."""
+    with pytest.raises(ValueError, match=message):
+        Prefactored(small_cloth(), 0.01, **options)

@@ -17,6 +17,9 @@ and ``H`` solves ``x(L0) = span``. A string of ``n`` nodes (physical
 scaling: masses lumped at the nodes, ``k = EA / L0``) and a cloth pinned
 along two opposite edges (each row such a string) converge to it at
 second order in the node spacing.
+
+Also: relax's methods on a stiff chain, a cloth and a drooping hair, and a
+system already at rest.
 """
 
 import numpy as np
@@ -24,9 +27,9 @@ import pytest
 import scipy.optimize
 
 from particles.errors import ConvergenceError
-from particles.massspring import cloth, string
 from particles.implicit import relax
 from particles.implicit.statics import ROUNDOFF
+from particles.massspring import cloth, string
 
 G = 9.81  # m/s^2
 SIZES = (21, 41, 81, 161, 321)  # nodes along the cable: the spacing halves from one to the next
@@ -171,3 +174,52 @@ def test_relax_that_fails_names_the_largest_net_force_and_its_load():
     s = string(41, 1.0, pin="both", span=0.8, scaling="physical", stretch_modulus=1e5)
     with pytest.raises(ConvergenceError, match=r"within 2 steps \(largest net force .* N on a particle of load"):
         relax(s, max_steps=2)
+
+
+@pytest.mark.parametrize("pin", ["top", "both"])
+def test_relax_converges_on_a_stiff_chain_with_its_defaults(pin):
+    """Issue 13: an 81-node chain with EA = 1e5 N relaxes with the default tol (each node's weight sets it)."""
+    s = string(81, 1.0, pin=pin, span=0.8 if pin == "both" else None, scaling="physical", linear_density=0.2,
+               stretch_modulus=1e5)
+    relax(s)
+    tension = s.springs["structural"].k * (s.springs["structural"].lengths(s.X[:, 0]) - 1.0 / 80)
+    free = np.setdiff1d(np.arange(s.n), s.pinned)
+    assert np.abs(s.total_force(s.X, 0.0)[free]).max() <= 1e-8 * tension.max()
+    np.testing.assert_allclose(s.reaction_forces().sum(axis=0), [0.0, 0.2 * 9.81], rtol=1e-7, atol=1e-8)
+    if pin == "top":  # each spring carries the weight below it
+        below = s.m[::-1].cumsum()[::-1][1:] * 9.81
+        np.testing.assert_allclose(tension, below, rtol=1e-6)
+
+
+def test_relax_finds_rest_and_rejects_bad_method():
+    """relax() brings a pinned cloth to rest (net forces ~ 0) and names the allowed methods otherwise."""
+    c = cloth(6, 6, pins="top edge", scaling="physical")
+    relax(c)
+    F = c.total_force(c.X, 0.0)
+    free = np.setdiff1d(np.arange(c.n), c.pinned)
+    assert np.abs(F[free]).max() < 1e-8 * c.m.max() * 9.81 * 10
+    with pytest.raises(ValueError, match="method must be 'auto', 'implicit' or 'newton'"):
+        relax(c, method="euler")
+
+
+def test_relax_newton_finds_a_large_droop():
+    """Newton relaxation settles a soft hair with stiff segments that droops far beyond linear beam theory."""
+    from particles.massspring import hair
+
+    mu, L, EI = 0.05, 0.3, 0.002
+    h = hair(6, L, scaling="physical", linear_density=mu, stretch_modulus=1e3, bending_modulus=EI)
+    relax(h, method="newton")
+    F = h.total_force(h.X, 0.0)
+    assert np.abs(F[2:]).max() < 1e-9  # the free particles are at rest
+    droop = -h.X[-1, 0, 1]
+    assert 0.2 * L < droop < mu * 9.81 * L**4 / (8 * EI)  # large, and below the linear prediction
+    assert np.linalg.norm(h.X[-1, 0] - h.X[0, 0]) <= L * 1.001  # the hair does not get longer
+
+
+def test_relax_returns_at_once_from_an_equilibrium():
+    """Relaxing a system that is already at rest in equilibrium takes no step (no ConvergenceError)."""
+    s = string(10, 1.0)
+    relax(s)
+    x = s.X[:, 0].copy()
+    assert relax(s) == 0
+    np.testing.assert_array_equal(s.X[:, 0], x)

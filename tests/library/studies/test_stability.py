@@ -1,13 +1,9 @@
-"""The measured studies reproduce the theory they illustrate."""
-
-import csv
-import re
+"""The stability study (particles.studies.stability): omega h_max, h_max ~ k^(-1/2), implicit damping, cost."""
 
 import numpy as np
 import pytest
 
-from particles.studies import discretization, provot, stability
-from particles.studies.report import write_study, write_table
+from particles.studies import stability
 
 
 @pytest.mark.parametrize("method", ["symplectic_euler", "verlet", "rk4"])
@@ -55,83 +51,6 @@ def test_cost_explicit_grows_with_stiffness_implicit_does_not():
     assert cost[("symplectic_euler", 1e6)] / cost[("symplectic_euler", 1e2)] == pytest.approx(100, rel=0.2)
     assert cost[("rk4", 1e6)] / cost[("rk4", 1e2)] == pytest.approx(100, rel=0.2)
     assert cost[("implicit_euler", 1e6)] == cost[("implicit_euler", 1e2)]
-
-
-def test_discretization_study_small():
-    """Physical scaling: same sag and period at 6 and 12 per side, h_max ~ dx; naive: neither."""
-    study = discretization.discretization_study(resolutions=(6, 12), reference=6)
-    phys, naive = study["physical"], study["naive"]
-    assert phys["sag"][1] == pytest.approx(phys["sag"][0], rel=0.02)
-    assert phys["period"][1] == pytest.approx(phys["period"][0], rel=0.05)
-    assert naive["sag"][1] > 2 * naive["sag"][0]
-    assert naive["period"][1] > 1.5 * naive["period"][0]
-    assert phys["h_exponent"] == pytest.approx(1.0, abs=0.1)
-    assert abs(naive["h_exponent"]) < 0.1
-
-
-def test_provot_study_small():
-    """Soft springs stretch several times past 10%; the constraint holds them at 10% + tolerance."""
-    study = provot.provot_study(n=8, steps=200)
-    assert study["strain"]["free"].max() > 0.3
-    assert study["strain"]["provot"].max() <= 0.1 + study["tol"] + 1e-12
-    assert len(study["iterations"]) == 200
-
-
-def _key_number(lines, pattern):
-    """The number captured by `pattern` in the one summary line it matches."""
-    found = [m for m in (re.search(pattern, line.strip()) for line in lines) if m]
-    assert len(found) == 1, f"{pattern!r} should match one line of {lines}"
-    return float(found[0].group(1))
-
-
-# study -> (files written, checks of the summary: (pattern capturing a number, lower bound, upper bound))
-STUDY_OUTPUTS = {
-    "order": (["order.csv", "order.png", "order.svg"],
-              [(r"^rk4 .*observed (\d+\.\d+)", 3.9, 4.1), (r"^verlet .*observed (\d+\.\d+)", 1.9, 2.1)]),
-    "stability": (["stability.csv", "stability.png", "stability.svg", "stability_cost.csv"],
-                  [(r"^verlet .*omega h_max = (\d+\.\d+)", 1.98, 2.0), (r"^rk4 .*omega h_max = (\d+\.\d+)", 2.80, 2.83),
-                   (r"^symplectic_euler .*slope of h_max vs k: ([-+]\d+\.\d+)", -0.51, -0.49)]),
-    "provot": (["provot.csv", "provot.png", "provot.svg"],
-               [(r"soft springs (\d+)%", 30, 100), (r"with the constraint (\d+\.\d+)%", 9.0, 11.0)]),
-    "discretization": (["discretization.csv", "discretization.png", "discretization.svg"],
-                       [(r"^physical +sag \(mm\) \[(\d+\.\d+)", 8.0, 9.0), (r"^physical .*h_max ~ dx\^(\d+\.\d+)", 0.9, 1.1), (r"^naive .*h_max ~ dx\^(-?\d+\.\d+)", -0.1, 0.1)]),
-}
-
-
-@pytest.mark.parametrize("name", sorted(STUDY_OUTPUTS))
-def test_write_study_files_and_summary(name, tmp_path):
-    """Each study writes a non-empty PNG, SVG and CSV table(s) and prints its key numbers."""
-    lines = []
-    files = write_study(name, tmp_path, log=lines.append)
-    expected, checks = STUDY_OUTPUTS[name]
-    assert sorted(p.name for p in files) == expected
-    assert all(p.parent == tmp_path and p.stat().st_size > 0 for p in files)
-    for p in files:
-        head = p.read_bytes()[:400]
-        if p.suffix == ".png":
-            assert head.startswith(b"\x89PNG\r\n\x1a\n")
-        elif p.suffix == ".svg":
-            assert b"<svg" in head
-        else:
-            with open(p, newline="") as fh:
-                rows = list(csv.reader(fh))
-            assert len(rows) >= 3 and all(len(r) == len(rows[0]) for r in rows)
-    assert lines[0].startswith(f"study {name} (") and all(p.name in lines[0] for p in files)
-    for pattern, low, high in checks:
-        assert low <= _key_number(lines[1:], pattern) <= high, (pattern, lines)
-
-
-def test_write_study_and_write_table_errors(tmp_path):
-    """Unknown study names, a non-callable log and empty tables are ValueErrors naming the problem."""
-    with pytest.raises(ValueError, match="unknown study 'speed'; expected one of 'order'"):
-        write_study("speed", tmp_path)
-    with pytest.raises(ValueError, match="name must be a study's name"):
-        write_study(["order"], tmp_path)
-    with pytest.raises(ValueError, match="log must be callable"):
-        write_study("order", tmp_path, log="stdout")
-    with pytest.raises(ValueError, match="rows must be a non-empty list of dicts"):
-        write_table(tmp_path, "empty", [])
-    assert write_table(str(tmp_path), "t", [{"a": 1, "b": 2}]).read_text().splitlines() == ["a,b", "1,2"]
 
 
 @pytest.mark.parametrize("omega_h", [[0.0], 0.0, -0.5, [1.0, -1.0], [], [np.nan]])
@@ -191,24 +110,3 @@ def test_blows_up_bad_arguments_are_named(kwargs, name):
     args = {"h": 0.1, **kwargs}
     with pytest.raises(ValueError, match=f"^{name} must"):
         stability.blows_up("verlet", 100.0, 1.0, **args)
-
-
-@pytest.mark.parametrize("kwargs, name", [
-    ({"h": -1.0}, "h"), ({"h": 0.0}, "h"), ({"steps": 0}, "steps"), ({"n": 2}, "n"), ({"k": -30.0}, "k"),
-    ({"max_strain": 0.0}, "max_strain"), ({"every": 0}, "every"),
-])
-def test_provot_study_bad_arguments_are_named(kwargs, name):
-    """provot_study names its own argument (h, not the integrator's t1)."""
-    with pytest.raises(ValueError, match=f"^{name} must"):
-        provot.provot_study(**kwargs)
-
-
-@pytest.mark.parametrize("call, name", [
-    (lambda: discretization.hanging_cloth(2, "physical"), "n"),
-    (lambda: discretization.bounce_period(discretization.hanging_cloth(4, "physical"), periods=0), "periods"),
-    (lambda: discretization.bounce_period(discretization.hanging_cloth(4, "physical"), safety=1.5), "safety"),
-], ids=["n", "periods", "safety"])
-def test_discretization_bad_arguments_are_named(call, name):
-    """A too small cloth, no periods, a step past the stability limit are named."""
-    with pytest.raises(ValueError, match=f"^{name} must"):
-        call()

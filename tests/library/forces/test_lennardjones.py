@@ -1,182 +1,12 @@
-"""Forces: formulas, symmetries, momentum, potentials, and bucket grid == all pairs."""
+"""Lennard-Jones (particles.forces.lennardjones): the formula, bucket grid == all pairs, the periodic box."""
 
 import numpy as np
 import pytest
 
 from particles import ParticleSystem
-from particles.forces import (
-    Attractor,
-    Damping,
-    Field,
-    Gravity,
-    LennardJones,
-    NBodyGravity,
-    Vortex,
-    Wind,
-    scatter_pair_forces,
-)
+from particles.forces import LennardJones
 
-
-def numerical_gradient(energy, x, eps=1e-6):
-    """Central-difference gradient of a scalar function of positions (test helper)."""
-    grad = np.zeros_like(x)
-    for idx in np.ndindex(x.shape):
-        e = np.zeros_like(x)
-        e[idx] = eps
-        grad[idx] = (energy(x + e) - energy(x - e)) / (2 * eps)
-    return grad
-
-
-def test_gravity_is_mass_proportional_and_can_point_up():
-    """Gravity is m g for each particle, and an upward g lifts (smoke)."""
-    x = np.zeros((3, 2))
-    m = np.array([1.0, 2.0, 0.5])
-    np.testing.assert_allclose(Gravity([0, -9.81])(x, m=m), np.outer(m, [0, -9.81]))
-    assert np.all(Gravity([0, 0.3])(x, m=m)[:, 1] > 0)  # smoke rises
-
-
-def test_gravity_dimension_mismatch_is_reported():
-    """A 3D g on 2D particles is refused, naming both dimensions."""
-    with pytest.raises(ValueError, match="g has 3 components but the particles live in 2 dimensions"):
-        Gravity([0, 0, -9.81])(np.zeros((1, 2)))
-
-
-def test_damping_opposes_velocity():
-    """Damping is -d v, and a negative d is refused by name."""
-    v = np.array([[1.0, -2.0], [0.0, 3.0]])
-    np.testing.assert_allclose(Damping(0.4)(np.zeros((2, 2)), v), -0.4 * v)
-    with pytest.raises(ValueError, match="d must be a finite number >= 0"):
-        Damping(-1.0)
-
-
-def test_wind_constant_and_gusting():
-    """Calm wind is uniform; gusts vary with time and along the wind."""
-    x = np.array([[0.0, 0.0], [0.25, 0.0]])
-    calm = Wind([2.0, 0.0])
-    np.testing.assert_allclose(calm(x, t=3.0), [[2.0, 0.0]] * 2)
-    gusty = Wind([2.0, 0.0], gust=0.5, period=1.0, wavelength=1.0)
-    F0, F1 = gusty(x, t=0.0), gusty(x, t=0.25)
-    np.testing.assert_allclose(F0[:, 1], 0.0)
-    np.testing.assert_allclose(F0[:, 0], 2.0 * (1 + 0.5 * np.sin(-2 * np.pi * x[:, 0])))
-    assert not np.allclose(F0, F1)
-    assert F1[1, 0] == pytest.approx(2.0)  # gust front: phase 0 at x = 0.25, t = 0.25
-
-
-def test_attractor_formula_repulser_and_potential():
-    """The softened attractor's force follows its formula, a negative strength repels, and F = -grad U."""
-    x = np.array([[1.0, 0.0], [0.0, -2.0], [3.0, 4.0]])
-    a = Attractor([0.0, 0.0], strength=2.0, softening=0.5)
-    F = a(x)
-    r = -x
-    r2 = np.sum(r**2, axis=1) + 0.25
-    np.testing.assert_allclose(F, 2.0 * r / (r2**1.5)[:, None])
-    np.testing.assert_allclose(Attractor([0, 0], -2.0, softening=0.5)(x), -F)  # negative repels
-    grad = numerical_gradient(lambda y: a.potential_energy(y, None), x)
-    np.testing.assert_allclose(F, -grad, rtol=1e-6, atol=1e-9)
-
-
-def test_attractor_moving_center():
-    """A centre given as a function of time moves with t."""
-    a = Attractor(lambda t: [t, 0.0], strength=1.0)
-    x = np.array([[1.0, 0.0]])
-    assert a(x, t=0.0)[0, 0] < 0 < a(x, t=2.0)[0, 0]
-
-
-def test_vortex_2d_is_tangential_counterclockwise():
-    """A 2D vortex pushes tangentially, counterclockwise, with the core-softened magnitude."""
-    rng = np.random.default_rng(1)
-    x = rng.normal(size=(50, 2))
-    F = Vortex([0.0, 0.0], strength=1.5, core=0.2)(x)
-    np.testing.assert_allclose(np.sum(F * x, axis=1), 0.0, atol=1e-12)  # no radial part
-    assert np.all(x[:, 0] * F[:, 1] - x[:, 1] * F[:, 0] > 0)  # positive torque about z
-    r = np.linalg.norm(x, axis=1)
-    np.testing.assert_allclose(np.linalg.norm(F, axis=1), 1.5 * r / (r**2 + 0.04))
-
-
-def test_vortex_3d_about_axis():
-    """In 3D the swirl is perpendicular to the axis and to the radius."""
-    rng = np.random.default_rng(2)
-    axis = np.array([1.0, 1.0, 0.0])
-    x = rng.normal(size=(40, 3))
-    c = np.array([0.5, 0.0, 1.0])
-    F = Vortex(c, strength=2.0, axis=axis)(x)
-    np.testing.assert_allclose(F @ axis, 0.0, atol=1e-12)
-    np.testing.assert_allclose(np.sum(F * (x - c), axis=1), 0.0, atol=1e-12)
-    with pytest.raises(ValueError, match="axis must be a non-zero vector"):
-        Vortex(c, 1.0, axis=[0, 0, 0])
-
-
-def test_field_calls_user_function_and_checks_shape():
-    """A Field calls the user's fn(x, t), and a wrong shape or a non-function is refused by name."""
-    fn = Field(lambda x, t: np.sin(t) * x)
-    x = np.array([[1.0, 2.0]])
-    np.testing.assert_allclose(fn(x, t=0.5), np.sin(0.5) * x)
-    with pytest.raises(ValueError, match=r"fn\(x, t\) must return shape \(1, 2\), got \(2,\)"):
-        Field(lambda x, t: np.zeros(2))(x)
-    with pytest.raises(ValueError, match="fn must be a function"):
-        Field(3.0)
-
-
-def test_scatter_pair_forces_equal_and_opposite_with_repeats():
-    """Repeated indices accumulate (unlike F[i] += f) and the total is zero."""
-    F = np.zeros((3, 2))
-    i, j = np.array([0, 0, 1]), np.array([1, 2, 2])
-    f = np.array([[1.0, 0.0], [0.0, 2.0], [3.0, 3.0]])
-    scatter_pair_forces(F, i, j, f)
-    np.testing.assert_allclose(F, [[1.0, 2.0], [2.0, 3.0], [-3.0, -5.0]])
-    np.testing.assert_allclose(F.sum(axis=0), 0.0)
-
-
-# -- N-body ------------------------------------------------------------------
-
-
-def test_nbody_two_bodies_inverse_square():
-    """|F| = G m1 m2 / r^2 along the line joining the bodies, equal and opposite."""
-    x = np.array([[0.0, 0.0, 0.0], [3.0, 4.0, 0.0]])
-    m = np.array([2.0, 5.0])
-    F = NBodyGravity(G=1.5)(x, m=m)
-    np.testing.assert_allclose(F[0], 1.5 * 2 * 5 / 25 * np.array([0.6, 0.8, 0.0]))
-    np.testing.assert_allclose(F[1], -F[0])
-
-
-def test_nbody_momentum_and_potential():
-    """Total force zero to round-off; force is minus the gradient of the potential."""
-    rng = np.random.default_rng(4)
-    x = rng.normal(size=(60, 3))
-    m = rng.uniform(0.5, 2.0, 60)
-    nb = NBodyGravity(G=1.0, softening=0.05)
-    F = nb(x, m=m)
-    assert np.abs(F.sum(axis=0)).max() < 1e-12 * np.abs(F).max() * 60
-    grad = numerical_gradient(lambda y: nb.potential_energy(y, m), x, eps=1e-6)
-    np.testing.assert_allclose(F, -grad, rtol=1e-5, atol=1e-6)
-
-
-def test_nbody_blocks_match_direct_sum():
-    """The blocked computation equals a direct double sum (many blocks for large n)."""
-    rng = np.random.default_rng(5)
-    x = rng.normal(size=(1200, 2))
-    m = rng.uniform(1, 2, 1200)
-    F = NBodyGravity(softening=0.1)(x, m=m)
-    k = 17
-    r = x - x[k]
-    r2 = np.sum(r**2, axis=1) + 0.01
-    r2[k] = np.inf
-    np.testing.assert_allclose(F[k], (m[k] * m / r2**1.5) @ r, rtol=1e-10)
-
-
-def test_two_body_orbit_conserves_energy():
-    """A circular two-body orbit with Verlet keeps its energy within 1e-4."""
-    G, M = 1.0, 1.0
-    x = np.array([[0.0, 0.0], [1.0, 0.0]])
-    v = np.array([[0.0, 0.0], [0.0, 1.0]])
-    ps = ParticleSystem(x, v=v, m=[M, 1e-6], forces=[NBodyGravity(G)])
-    E0 = ps.kinetic_energy() + ps.potential_energy()
-    ps.run(2 * np.pi, 0.005, method="verlet")
-    assert abs(ps.kinetic_energy() + ps.potential_energy() - E0) < 1e-4 * abs(E0)
-    np.testing.assert_allclose(ps.X[1, 0], [1.0, 0.0], atol=1e-2)  # back after one period
-
-
-# -- Lennard-Jones -----------------------------------------------------------
+from .helpers import numerical_gradient
 
 
 def test_lennard_jones_formula_and_zero_crossing():
@@ -280,17 +110,6 @@ def test_lennard_jones_bad_parameters():
         LennardJones(1.0, 1.0, 13, 7, -1.0)
 
 
-def test_forces_do_not_modify_inputs():
-    """x and v are read, never written."""
-    rng = np.random.default_rng(0)
-    x, v = rng.normal(size=(30, 3)), rng.normal(size=(30, 3))
-    x.setflags(write=False)
-    v.setflags(write=False)
-    for force in [Gravity([0, 0, -1]), Damping(1.0), Wind([1, 0, 0], gust=0.3), Attractor([0, 0, 0], 1.0),
-                  Vortex([0, 0, 0], 1.0), NBodyGravity(softening=0.1), LennardJones.from_epsilon_sigma()]:
-        force(x, v, 0.5)
-
-
 @pytest.mark.parametrize("method", ["verlet", "rk4", "midpoint", "trapezoid", "euler"])
 @pytest.mark.parametrize("d", [2, 3])
 def test_lennard_jones_overlap_raises_simulation_diverged(method, d):
@@ -305,19 +124,6 @@ def test_lennard_jones_overlap_raises_simulation_diverged(method, d):
             ps.run(0.1, 0.01, method=method)
     assert info.value.step == 1 and info.value.t == 0.0
     np.testing.assert_array_equal(ps.X[:, 0], x)  # the system is left as it was
-
-
-def test_force_call_checks_masses():
-    """force(x, m=...) refuses masses <= 0 and masses of the wrong length, naming m."""
-    x = np.zeros((2, 2))
-    for m in (-1.0, 0.0, [1.0, -2.0]):
-        with pytest.raises(ValueError, match="m must be positive"):
-            Gravity([0, -9.81])(x, m=m)
-    with pytest.raises(ValueError, match=r"m must be a number or have shape \(2,\), got shape \(3,\)"):
-        Gravity([0, -9.81])(x, m=[1.0, 2.0, 3.0])
-    with pytest.raises(ValueError, match="t must be a finite real number"):
-        Gravity([0, -9.81])(x, t=np.nan)
-    np.testing.assert_allclose(Gravity([0, -9.81])(x, m=[1.0, 2.0]), [[0, -9.81], [0, -19.62]])
 
 
 def test_lennard_jones_documented_helpers():
@@ -438,14 +244,3 @@ def test_force_pass_in_chunks_equals_one_pass(monkeypatch):
     monkeypatch.setattr(lennardjones, "_PAIR_CHUNK", 1000)  # many chunks (the 2 n floor: 1000 pairs each)
     np.testing.assert_allclose(lj(x), F_one, rtol=0, atol=1e-10)
     assert lj.last_virial == pytest.approx(lj.virial(x), rel=1e-12)
-
-
-def test_position_only_forces_say_so():
-    """Forces that ignore velocity and time declare it (the run may reuse them); damping does not."""
-    lj = LennardJones.from_epsilon_sigma()
-    assert not lj.uses_velocity and not lj.uses_time
-    assert not Gravity([0, -1]).uses_velocity and not NBodyGravity().uses_time
-    assert Damping(1.0).uses_velocity and not Damping(1.0).uses_time
-    assert Wind([1, 0], gust=0.5).uses_time and not Wind([1, 0]).uses_time
-    assert Attractor(lambda t: [t, 0.0], 1.0).uses_time and not Attractor([0, 0], 1.0).uses_time
-    assert not Field(lambda x, t: x).uses_velocity and Field(lambda x, t: x).uses_time

@@ -1,0 +1,84 @@
+"""The backend switch (particles.backends): numpy, numba, auto, the global choice; numba loaded only when used."""
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+from particles import backends
+from particles.forces import LennardJones
+from particles.springs import Springs
+
+from .helpers import needs_numba
+
+
+def test_import_particles_does_not_import_numba():
+    """numba is loaded only by a force pass that uses it, never by ``import particles`` or the NumPy backend."""
+    code = ("import sys, numpy as np, particles; from particles.springs import Springs; "
+            "Springs([[0, 1]], 1.0, k=2.0)(np.array([[0.0, 0.0], [2.0, 0.0]])); print('numba' in sys.modules)")
+    env = dict(os.environ, PARTICLES_BACKEND="numpy")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    assert done.stdout.strip() == "False"
+
+
+def test_auto_is_numpy_for_small_problems_and_under_particles_backend_numpy(monkeypatch):
+    """"auto" compiles only from AUTO_MIN particles, never with PARTICLES_BACKEND=numpy or NUMBA_DISABLE_JIT=1."""
+    monkeypatch.delenv("PARTICLES_BACKEND", raising=False)
+    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
+    assert backends.resolve("auto", backends.AUTO_MIN - 1) == "numpy"
+    assert backends.resolve("numpy", 10**9) == "numpy"
+    expected = "numba" if "numba" in backends.available() else "numpy"
+    assert backends.resolve("auto", backends.AUTO_MIN) == expected
+    monkeypatch.setenv("NUMBA_DISABLE_JIT", "1")  # as in the grader's workers
+    assert backends.resolve(None, 10**9) == backends.resolve("auto", 10**9) == "numpy"
+    monkeypatch.delenv("NUMBA_DISABLE_JIT")
+    monkeypatch.setenv("PARTICLES_BACKEND", "numpy")
+    assert backends.get_backend() == "numpy"
+    assert backends.resolve(None, 10**9) == backends.resolve("auto", 10**9) == "numpy"
+
+
+def test_the_grader_workers_never_compile():
+    """The worker's environment turns 'auto' into NumPy (no numba, no cache in the sandbox)."""
+    import inspect
+
+    from particles.course.worker import process
+
+    assert '"NUMBA_DISABLE_JIT": "1"' in inspect.getsource(process.Worker)
+
+
+@needs_numba
+def test_auto_falls_back_to_numpy_when_numba_cannot_load(monkeypatch):
+    """With numba unusable, 'auto' warns and uses NumPy from then on; an explicit 'numba' raises."""
+    monkeypatch.delattr(backends, "compiled", raising=False)
+    monkeypatch.setitem(sys.modules, "particles.backends.compiled", None)  # importing it now fails
+    monkeypatch.setitem(backends._state, "broken", False)
+    with pytest.warns(RuntimeWarning, match="numba could not be loaded"):
+        assert backends.kernels_for("auto", 10**6) is None
+    assert backends.resolve("auto", 10**6) == "numpy"
+    with pytest.raises(ImportError):
+        backends.kernels_for("numba", 10)
+
+
+def test_the_global_switch_applies_to_objects_built_before_it():
+    """``using`` sets the choice of objects with backend=None for the block, and restores it after."""
+    before = backends.get_backend()
+    with backends.using("numpy"):
+        assert backends.resolve(None, 10**9) == "numpy"
+        assert backends.resolve("auto", 10) == "numpy"
+    assert backends.get_backend() == before
+
+
+def test_bad_backends_are_refused_with_a_clear_message(monkeypatch):
+    """An unknown name names the argument; 'numba' without numba names the extra to install."""
+    with pytest.raises(ValueError, match="backend must be 'numpy', 'numba', 'auto' or None, got 'cuda'"):
+        Springs([[0, 1]], 1.0, backend="cuda")
+    with pytest.raises(ValueError, match="PARTICLES_BACKEND"):
+        monkeypatch.setenv("PARTICLES_BACKEND", "fast")
+        backends.get_backend()
+    monkeypatch.delenv("PARTICLES_BACKEND")
+    monkeypatch.setitem(backends._state, "numba", False)
+    assert backends.available() == ("numpy",)
+    with pytest.raises(ValueError, match=r"pip install 'particles\[fast\]'"):
+        LennardJones.from_epsilon_sigma(backend="numba")
+    assert backends.resolve("auto", 10**9) == "numpy"
