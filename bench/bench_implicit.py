@@ -22,7 +22,7 @@ Every compiled kernel is compiled (or loaded from the cache) before the
 timed runs. Wall times are of one run each, on a shared machine: read the
 ratios, measured in the same run; the load average is printed before and
 after. The configurations are those of :func:`explicit_config` and
-:data:`STEPS` (``tests/library/implicit/test_prefactored_compiled.py``
+:data:`STEPS` (``tests/library/implicit/test_prefactored.py``
 checks the strain criterion on them).
 
 Run:  python bench/bench_implicit.py [--quick] [--moduli 5000 20000 80000] [--no-baraff-witkin]
