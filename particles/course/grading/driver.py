@@ -530,6 +530,8 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         changed = isolation_module.library_changes(before)
         if out is not None:
             _write_outputs(out, done, tests, hidden_visibility, written=written)
+            for record in done.values():  # records/ holds what the feedback says: written grades, late work
+                store.update(record)
             if changed:
                 (out / "LIBRARY-CHANGED.txt").write_text(
                     "The installed particles library changed while these submissions were graded:\n"

@@ -45,8 +45,28 @@ class RecordStore:
 
     def save(self, result):
         """Write one notebook's :class:`~particles.course.results.records.SubmissionRecord` (atomically: a new file, renamed)."""
-        target = self.path(result.student, result.exercise)
-        data = dict(result.to_dict(), options=self.options)
+        self._write(self.path(result.student, result.exercise), dict(result.to_dict(), options=self.options))
+
+    def update(self, result, fields=("written", "late")):
+        """Bring the record file of `result` up to date in `fields` only; True when it changed.
+
+        After a rubric is merged (written grades) or a late decision is made again, the file on disk
+        says so too, so that what reads ``records/`` (``particles export``, a later ``--student`` run)
+        sees the same totals as the feedback; every other field of the file, its options included, is
+        kept as it is. A record without a file is left alone (it was not graded in this folder).
+        """
+        path = self.path(result.student, result.exercise)
+        try:
+            data = json.loads(path.read_text())
+        except (OSError, ValueError):
+            return False
+        new = {name: json.loads(json.dumps(getattr(result, name))) for name in fields}
+        if not isinstance(data, dict) or all(data.get(name) == value for name, value in new.items()):
+            return False
+        self._write(path, dict(data, **new))
+        return True
+
+    def _write(self, target, data):
         # not "*.json" until renamed: a driver killed while writing leaves no file that reads as a record
         handle, name = tempfile.mkstemp(dir=self.folder, prefix=".record-", suffix=".part")
         try:
