@@ -282,7 +282,8 @@ def build_parser():
     release.set_defaults(run=_release)
 
     grade = sub.add_parser("grade", help="grade notebooks (files or folders) with the exercise tests")
-    grade.add_argument("submissions", nargs="+", metavar="SUBMISSION", help="a notebook or a folder of them")
+    grade.add_argument("submissions", nargs="+", metavar="SUBMISSION",
+                       help="a notebook, a folder of them (a folder per student) or an LMS's zip of them")
     grade.add_argument("--out", help="write gradebook.csv, <student>/results.json and feedback.md here")
     grade.add_argument("--jobs", type=int, default=1, help="notebooks graded in parallel (default 1)")
     grade.add_argument("--exercise", help="grade every notebook as this exercise")
