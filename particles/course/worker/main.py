@@ -130,6 +130,9 @@ class _Server:
 
         from . import registry
 
+        import threading
+
+        self.evaluating = threading.Lock()
         registry.EVALUATE = self.evaluate  # functions the grader evaluates (and counts) on its side
         self.builtins = vars(builtins)
         self.pristine = dict(self.builtins)  # student code may replace builtins the worker itself needs
@@ -152,15 +155,21 @@ class _Server:
             remaining -= len(chunk)
         return b"".join(chunks)
 
-    def evaluate(self, spec, args, kwargs):
-        """Have the grader evaluate the registry function `spec` on `args` (one round trip); return its value."""
+    def evaluate(self, token, args, kwargs):
+        """Have the grader evaluate its function `token` on `args` (one round trip); return the value.
+
+        The round trips of several threads are serialised (one lock), so that
+        their frames never interleave on the pipe.
+        """
         from .protocol import ProtocolError, read_frame, write_frame
 
-        try:
-            write_frame(self.proto_out, {"op": "evaluate", "spec": spec, "args": list(args), "kwargs": dict(kwargs)})
-        except ProtocolError as error:
-            raise TypeError(f"f must be called with numbers and NumPy arrays: {error}") from None
-        answer = read_frame(self.read_exactly)
+        with self.evaluating:
+            try:
+                write_frame(self.proto_out, {"op": "evaluate", "token": token, "args": list(args),
+                                             "kwargs": dict(kwargs)})
+            except ProtocolError as error:
+                raise TypeError(f"f must be called with numbers and NumPy arrays: {error}") from None
+            answer = read_frame(self.read_exactly)
         if not isinstance(answer, dict) or not answer.get("ok"):
             message = answer.get("error") if isinstance(answer, dict) else "no answer"
             raise ValueError(f"f could not be evaluated: {message}")
@@ -201,8 +210,6 @@ class _Server:
         return {"ok": True, "defined": defined, "errors": errors}
 
     def call(self, request):
-        from .registry import CountingFunction
-
         function = self.namespace.get(request["name"])
         if function is None or not callable(function):
             return {"ok": False, "error": {"type": "NotDefined", "message": request["name"], "where": ""}}
@@ -226,18 +233,13 @@ class _Server:
         def after(v):
             return v if isinstance(v, np.ndarray) else None
 
-        counts = {}
-        for key, v in list(enumerate(args)) + list(kwargs.items()):
-            if isinstance(v, CountingFunction):
-                counts[str(key)] = v.calls
         return {
             "ok": True,
             "value": value,
             "seconds": time.perf_counter() - start,
             "args_after": [after(v) for v in args],
             "kwargs_after": {k: after(v) for k, v in kwargs.items()},
-            "calls": counts,
-        }
+        }  # no count of f: the grader counts the evaluations it answered (see registry)
 
     def serve(self):
         from .protocol import read_frame

@@ -12,9 +12,9 @@ returned something the protocol cannot carry. After a timeout or a crash the
 worker is killed and the next call starts a fresh one.
 """
 
-import copy
 import functools
 import os
+import secrets
 import shutil
 import signal
 import tempfile
@@ -106,8 +106,9 @@ class Submission:
         see :func:`particles.course.walls.isolation.describe`).
     last : dict
         Details of the last successful call: ``seconds``, and ``calls``
-        (argument position -> how often the student's code called that
-        registry function).
+        (argument position -> how often the student's code evaluated the
+        function passed there with ``remote(..., counted=True)``, as the
+        grader counted it).
     """
 
     def __init__(self, source, forbidden=None, deny=(), scratch=None, python=None, isolation=None,
@@ -283,6 +284,7 @@ class Submission:
             With one line saying what went wrong.
         """
         self.called.append(name)
+        self.last = {}  # a count is never read from an earlier call
         if self.load_failure:
             raise GradingFailure(self.load_failure)
         uses = self.code.forbidden_uses(name, self.forbidden)
@@ -314,25 +316,40 @@ class Submission:
             raise GradingFailure(self._raised(name, reply.get("error", {}), limit))
         if check_inputs:
             self._check_inputs(name, args, kwargs, reply)
-        calls = dict(reply.get("calls", {})) if isinstance(reply.get("calls"), dict) else {}
-        calls.update({key: entry[1] for key, entry in counted.items()})  # the grader's own count wins
+        # only the grader's own count: the evaluations it answered during this call (the worker sends none)
+        calls = {entry[2]: entry[1] for entry in counted.values()}
         self.last = {"seconds": reply.get("seconds"), "calls": calls}
         value = reply.get("value")
         return value
 
     @staticmethod
     def _count(key, value, counted):
-        """A counted registry function as sent for this call (tagged with its position), else `value`."""
+        """A counted registry function as sent for this call (an opaque token of its own), else `value`."""
         if isinstance(value, RemoteFunction) and value.counted:
-            tagged = copy.copy(value)
-            tagged.__remote_spec__ = dict(value.__remote_spec__, key=str(key))
-            counted[str(key)] = [value, 0]
-            return tagged
+            token = secrets.token_hex(12)
+            counted[token] = [value, 0, str(key)]
+            return _Token(token)
         return value
 
     def calls_of(self, position):
-        """How often the last call used the registry function passed at `position` (int or keyword)."""
-        return self.last.get("calls", {}).get(str(position), 0)
+        """How often the last call evaluated the counted function passed at `position` (int or keyword).
+
+        The grader's own count: every evaluation it answered during that call
+        (see :mod:`particles.course.worker.registry`); nothing the worker says
+        enters it.
+
+        Raises
+        ------
+        ValueError
+            When no function made with ``remote(..., counted=True)`` was
+            passed at `position` in the last call (or that call failed): a
+            count kept in the worker is never used for grading.
+        """
+        calls = self.last.get("calls", {})
+        if str(position) not in calls:
+            raise ValueError(f"calls_of({position!r}): the last call got no function counted by the grader at "
+                             f"position {position!r}; pass remote(..., counted=True) there")
+        return calls[str(position)]
 
     def _check_inputs(self, name, args, kwargs, reply):
         params = self.code.parameters(name) or []
@@ -350,10 +367,19 @@ class Submission:
                 )
 
 
+class _Token:
+    """What the worker receives for a counted function: an opaque token (encoded as a callable spec)."""
+
+    def __init__(self, token):
+        self.__remote_spec__ = {"kind": "grader", "token": token}
+
+    def __call__(self, *args, **kwargs):  # never called: only sent
+        raise RuntimeError("a token stands for a function the grader evaluates")
+
+
 def _evaluate(counted, frame):
     """The grader's answer to a worker's ``{"op": "evaluate"}`` frame: the value, and one more call counted."""
-    spec = frame.get("spec") if isinstance(frame.get("spec"), dict) else {}
-    entry = counted.get(str(spec.get("key")))
+    entry = counted.get(frame.get("token")) if isinstance(frame.get("token"), str) else None
     if entry is None:
         return {"ok": False, "error": "not a function of this call"}
     entry[1] += 1
