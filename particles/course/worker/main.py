@@ -44,6 +44,7 @@ import time
 import types
 
 from ..walls import audit as sandbox
+from . import codeprints
 
 __all__ = ["main"]
 
@@ -136,6 +137,9 @@ class _Server:
         registry.EVALUATE = self.evaluate  # functions the grader evaluates (and counts) on its side
         self.builtins = vars(builtins)
         self.pristine = dict(self.builtins)  # student code may replace builtins the worker itself needs
+        self.own, self.trusted, self.kept = set(), set(), []  # ids of the notebook's compiled code (kept alive)
+        self.recording = None  # (arm, take) of the code recorder, when the exercise forbids library code
+        self.sent = set()  # fingerprints whose shingles the grader already has
 
     def restore(self):
         """Put back any built-in the student's code replaced; return their names."""
@@ -192,6 +196,12 @@ class _Server:
             except BaseException as error:  # a statement the grader's parser took but this Python does not
                 compiled.append((chunk, None))
                 errors.append(dict(_describe(error), label=chunk["label"]))
+        for chunk, code in compiled:  # the notebook's own code: never reported as the library's
+            for c in codeprints.nested(code) if code is not None else ():
+                self.own.add(id(c))
+                self.kept.append(c)
+                if chunk.get("provided"):
+                    self.trusted.add(id(c))
         if sandbox.WIRES is not None:  # the cells the course provides may use what the exercise forbids
             sandbox.WIRES.trust([code for chunk, code in compiled if code is not None and chunk.get("provided")])
         for chunk, code in compiled:
@@ -214,12 +224,18 @@ class _Server:
         if function is None or not callable(function):
             return {"ok": False, "error": {"type": "NotDefined", "message": request["name"], "where": ""}}
         args, kwargs = list(request.get("args", [])), dict(request.get("kwargs", {}))
+        reachable = self.reachable(function)
         start = time.perf_counter()
         try:
             _alarm(request.get("timeout", 5.0))
             try:
+                if self.recording:
+                    self.recording[1]()  # forget what ran before
+                    self.recording[0](True)
                 value = function(*args, **kwargs)
             finally:
+                if self.recording:
+                    self.recording[0](False)
                 _cancel_alarm()
                 changed = self.restore()
         except BaseException as error:
@@ -239,7 +255,42 @@ class _Server:
             "seconds": time.perf_counter() - start,
             "args_after": [after(v) for v in args],
             "kwargs_after": {k: after(v) for k, v in kwargs.items()},
+            "code": self.code_report(reachable),
         }  # no count of f: the grader counts the evaluations it answered (see registry)
+
+    def reachable(self, function):
+        """The code `function` can reach that the notebook did not compile (none when nothing is forbidden)."""
+        if not self.recording:
+            return []
+        try:
+            return codeprints.reachable_code(function, own=self.own, trusted=self.trusted)
+        except BaseException:  # an object of the student's that refuses to be looked at
+            return []
+
+    def code_report(self, reachable):
+        """Fingerprints of the foreign code of a call: what it can reach, and what started running during it.
+
+        The grader decides whether any is the library's (see :mod:`particles.course.worker.codeprints`).
+        """
+        if not self.recording:
+            return []
+        ran = [c for code in self.recording[1]() for c in codeprints.nested(code)]
+        records, done = [], set()
+        for code in list(reachable) + ran:
+            if id(code) in self.own or len(records) >= 5000:
+                continue
+            try:
+                record = codeprints.describe(code, with_shingles=False)
+                if record["fp"] in done:
+                    continue
+                done.add(record["fp"])
+                if record["fp"] not in self.sent and record["size"] > codeprints.FUZZY_MIN:
+                    record = codeprints.describe(code)
+                    self.sent.add(record["fp"])
+            except Exception:  # a code object dis cannot read (made by hand): nothing to compare
+                continue
+            records.append(record)
+        return records
 
     def serve(self):
         from .protocol import read_frame
@@ -326,6 +377,11 @@ def main(argv=None):
         config = read_frame(server.read_exactly)
     except EOFError:
         return 0
+    if config.get("forbidden"):  # code that starts running during a call: the grader checks it is not the library's
+        library = os.path.abspath(os.path.join(os.path.dirname(__file__), os.pardir, os.pardir)) + os.sep
+        hook, arm, take = codeprints.recorder(library)
+        sys.addaudithook(hook)
+        server.recording = (arm, take)
     wires = sandbox.WIRES = sandbox.Tripwires(config.get("forbidden", {}))
     sys.meta_path.insert(0, wires)
     wires.wire()

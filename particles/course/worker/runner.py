@@ -27,6 +27,7 @@ from ..reading.submission import SubmissionCode, read_submission
 from ..walls.limits import DEFAULTS, GRACE, check_limit, limits as all_limits
 from .process import Worker, WorkerDied, WorkerTimeout
 from .protocol import ProtocolError, Unsupported
+from .codeprints import library_prints
 from .registry import RemoteFunction
 
 __all__ = ["GradingFailure", "Submission", "DEFAULTS", "describe_value", "check_limit"]
@@ -314,6 +315,7 @@ class Submission:
             raise GradingFailure(f"`{name}` returned a value the grader could not read: {error}") from None
         if not reply.get("ok"):
             raise GradingFailure(self._raised(name, reply.get("error", {}), limit))
+        self._check_library_code(name, reply.get("code"))
         if check_inputs:
             self._check_inputs(name, args, kwargs, reply)
         # only the grader's own count: the evaluations it answered during this call (the worker sends none)
@@ -351,6 +353,25 @@ class Submission:
                              f"position {position!r}; pass remote(..., counted=True) there")
         return calls[str(position)]
 
+    def _check_library_code(self, name, records):
+        """Fail when the call ran a forbidden library function's code (read from its source and run, or copied).
+
+        The worker reports fingerprints of the code the call could reach or started
+        running that the notebook did not define; the library's are computed here, from
+        the installed library (see :mod:`particles.course.worker.codeprints`).
+        """
+        if not self.forbidden or not isinstance(records, list):
+            return
+        prints = _library_prints(tuple(sorted(self.forbidden)))
+        for record in records[:5000]:
+            hit = prints.match(record)
+            if hit:
+                label, forbidden = hit
+                raise GradingFailure(
+                    f"`{name}` runs the library's code, not yours: this is the library's `{label}` (recognised by "
+                    f"its compiled code, however it was loaded), which this exercise forbids: {self.forbidden[forbidden]}"
+                )
+
     def _check_inputs(self, name, args, kwargs, reply):
         params = self.code.parameters(name) or []
         after = list(zip(range(len(args)), args, reply.get("args_after", [])))
@@ -365,6 +386,12 @@ class Submission:
                     f"`{name}` modified its input `{label}` in place; leave the arrays it is given unchanged "
                     f"and return a new array (e.g. start from `{label}.copy()` or build the result with `+`)"
                 )
+
+
+@functools.lru_cache(maxsize=16)
+def _library_prints(forbidden):
+    """The fingerprints of the forbidden library code (a tuple of dotted names), computed once per grader."""
+    return library_prints(forbidden)
 
 
 class _Token:
