@@ -528,13 +528,16 @@ def euler_step(f, X, t, h):
         "fails": {"test_euler_step_leaves_X_unchanged": "evaluated f 2 times in one step"},
         "passes": ["test_euler_step_circle", "test_euler_step_oscillator", "test_euler_step_random"],
     },
-    "forges_the_count_with_a_wrapper_and_a_thread": {
+    "forges_the_count_with_a_wrapper_a_thread_and_a_new_f": {
         "replace": {"euler_step": """
-import threading
+import sys, threading
 
 def euler_step(f, X, t, h):
+    registry = sys.modules["particles.course.worker.registry"]
+    real = registry.EVALUATE
+    registry.EVALUATE = lambda *args: real(*args)       # the worker's link to the grader, wrapped
     calls = 0
-    def counted(X, t):                 # a wrapper with a counter of its own, rebound in a closure
+    def counted(X, t):                                  # a wrapper with a counter of its own, in a closure
         nonlocal calls
         calls += 1
         return f(X, t)
@@ -543,28 +546,9 @@ def euler_step(f, X, t, h):
     worker.start()
     worker.join()
     calls -= 1
-    return X + h * 0.5 * (results[0] + counted(X, t))
-"""},
-        "fails": {"test_euler_step_leaves_X_unchanged": "evaluated f 2 times in one step"},
-        "passes": ["test_euler_step_circle", "test_euler_step_oscillator", "test_euler_step_random"],
-    },
-    "forges_the_count_by_replacing_f_and_the_grader_link": {
-        "replace": {"euler_step": """
-import sys
-
-def euler_step(f, X, t, h):
-    registry = sys.modules["particles.course.worker.registry"]
-    real = registry.EVALUATE
-    registry.EVALUATE = lambda *args: real(*args)     # every evaluation still goes to the grader
-    original = type(f).__call__
-    type(f).__call__ = lambda self, *args: original(self, *args)
-    try:
-        slope = f(X, t)
-        slope = 0.5 * (slope + f(X, t))
-    finally:
-        type(f).__call__ = original
-        registry.EVALUATE = real
-    f = lambda X, t: slope                              # f replaced by a constant: no more evaluations
+    slope = 0.5 * (results[0] + counted(X, t))
+    registry.EVALUATE = real
+    f = lambda X, t: slope                              # f replaced: no more evaluations
     return X + h * f(X, t)
 """},
         "fails": {"test_euler_step_leaves_X_unchanged": "evaluated f 2 times in one step"},
@@ -626,25 +610,6 @@ def euler_step(f, X, t, h):
 """},
         "fails": {"test_euler_step_circle": "this is the library's `particles.integrators.euler`",
                   "test_euler_step_leaves_X_unchanged": "this is the library's `particles.integrators.euler`"},
-        "passes": ["test_total_force_three_particles"],
-    },
-    "copies_the_library_code_into_its_function": {
-        "replace": {"euler_step": """
-import inspect
-import particles.integrators.steppers as steppers_module
-from particles.integrators.common import check_arguments, evaluate
-
-
-def euler_step(f, X, t, h):
-    text = inspect.getsource(steppers_module).replace("Explicit (forward) Euler step", "Mine")
-    code = next(c for c in compile(text, "<x>", "exec").co_consts if getattr(c, "co_name", "") == "eu" + "ler")
-    def mine(f, X, t, h):
-        return X
-    mine.__code__ = code                                  # my function, the library's code
-    return mine(f, X, t, h)
-"""},
-        "fails": {"test_euler_step_circle": "this is the library's `particles.integrators.euler`",
-                  "test_euler_step_oscillator": "runs the library's code, not yours"},
         "passes": ["test_total_force_three_particles"],
     },
 }
