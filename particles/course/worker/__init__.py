@@ -13,5 +13,7 @@ Modules:
 * :mod:`~particles.course.worker.registry`: test problems and functions passed to student code by
   name; counted ones evaluated (and counted) by the grader;
 * :mod:`~particles.course.worker.codeprints`: fingerprints of compiled code, to recognise the library's
-  forbidden functions however a submission ran them.
+  forbidden functions however a submission ran them;
+* :mod:`~particles.course.worker.codewatch`: in the worker, the code a call could run besides the
+  notebook's own (what it reaches, what starts running during it).
 """

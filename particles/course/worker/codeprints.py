@@ -31,30 +31,25 @@ never matched: that short, an honest student writes the same.
 Who does what
 -------------
 The worker (untrusted) reports, for each call, the fingerprints of the code
-the called function can reach (:func:`reachable_code`: its own code, the
-functions, classes, modules, containers, closures and defaults it refers to,
-not descending into the installed library's or Python's own modules) and of
-the code that started running during the call (``exec``, ``FunctionType``,
-``__code__ =``, seen by an audit hook of the worker's, :func:`recorder`). The
-grader (trusted) computes the forbidden functions' fingerprints itself, from
-the installed library (:func:`library_prints`), and decides. A hostile worker
-could still lie: code that reaches the worker's own objects (frames of the
-serving loop) can empty what it reports, and library code created while the
-notebook loads and reached only through a computed look-up in an installed
-module (``getattr(numpy, "x" + "y")``) is not followed. Both take deliberate
-work against the grader itself; the tests of the walls show which of those
-doors are shut.
+the call could run that the notebook's own cells did not define
+(:mod:`particles.course.worker.codewatch`). The grader (trusted) computes the
+forbidden functions' fingerprints itself, from the installed library
+(:func:`library_prints`), and decides (:class:`LibraryPrints`). Code compiled
+from the notebook's own cells is the student's, even when it is shaped like
+the library's: only code that came from elsewhere (the library's files, read
+and run) is reported. What a hostile worker could still do is said in
+:mod:`particles.course.worker.codewatch`.
 """
 
 import bisect
 import dis
+import functools
 import hashlib
-import sys
 import types
 import zlib
 
-__all__ = ["fingerprint", "tokens", "shingles", "describe", "reachable_code", "recorder", "LibraryPrints",
-           "library_prints", "MIN_TOKENS", "FUZZY_MIN", "FUZZY_SHARE"]
+__all__ = ["fingerprint", "tokens", "shingles", "describe", "nested", "LibraryPrints", "library_prints",
+           "MIN_TOKENS", "FUZZY_MIN", "FUZZY_SHARE"]
 
 MIN_TOKENS = 12
 """Library code shorter than this (in tokens) is never matched: an honest student writes the same."""
@@ -185,184 +180,6 @@ def nested(code):
     return out
 
 
-def _installed_prefixes():
-    import os
-    import site
-
-    library = os.path.abspath(os.path.join(os.path.dirname(__file__), os.pardir, os.pardir)) + os.sep
-    prefixes = {sys.prefix, sys.base_prefix, sys.exec_prefix, os.path.dirname(os.__file__)}
-    try:
-        prefixes.update(site.getsitepackages())
-    except AttributeError:
-        pass
-    return tuple(sorted({os.path.abspath(p) + os.sep for p in prefixes if p} | {library}))
-
-
-_PREFIXES = None
-
-
-def _genuine_module(module):
-    """True for a module that is the installed one (Python's, NumPy's, the library's) under its own name."""
-    global _PREFIXES
-    if _PREFIXES is None:
-        _PREFIXES = _installed_prefixes()
-    name = getattr(module, "__name__", None)
-    if not isinstance(name, str) or sys.modules.get(name) is not module:
-        return False
-    path = getattr(module, "__file__", None)
-    return path is None or (isinstance(path, str) and path.startswith(_PREFIXES))
-
-
-def _genuine_function(function):
-    """True for a function of an installed module (its globals are that module's own dict)."""
-    globals_ = function.__globals__
-    module = sys.modules.get(globals_.get("__name__")) if isinstance(globals_.get("__name__"), str) else None
-    return module is not None and getattr(module, "__dict__", None) is globals_ and _genuine_module(module)
-
-
-def reachable_code(root, own=(), trusted=(), limit=20000):
-    """The code objects that `root` (a function or any callable) can run, as far as its references tell.
-
-    Follows functions (code, nested code, the globals their code names,
-    closures, defaults, ``__wrapped__``), methods, ``functools.partial``,
-    classes and instances (their methods), modules a submission made (all of
-    them; of an installed module only the attributes the code names),
-    dicts, lists, tuples and sets. It does not descend into functions of
-    installed modules, but reports their code (a library function re-run
-    into an installed module's dict is still seen), nor into the functions
-    whose code is in `trusted` (ids of the course's own code). Code whose id
-    is in `own` (the notebook's own statements, compiled by the worker) is
-    followed but not reported.
-
-    Returns
-    -------
-    list of types.CodeType
-        Each once, `own` and `trusted` ones left out.
-    """
-    import builtins
-    import functools
-
-    trusted = set(trusted)
-    skip = trusted | set(own)
-    seen, found, codes = set(), {}, []
-    stack = [root]
-
-    def add_code(code):
-        for c in nested(code):
-            if id(c) not in found and id(c) not in skip:
-                found[id(c)] = c
-                codes.append(c)
-
-    while stack and len(seen) < limit:
-        obj = stack.pop()
-        if id(obj) in seen:
-            continue
-        seen.add(id(obj))
-        try:
-            if isinstance(obj, types.FunctionType):
-                code = obj.__code__
-                if id(code) in trusted:
-                    continue
-                add_code(code)
-                if _genuine_function(obj):
-                    continue
-                names = {n for c in nested(code) for n in c.co_names}
-                values = [obj.__globals__[n] for n in names if n in obj.__globals__]
-                values += [vars(builtins)[n] for n in names if n not in obj.__globals__ and n in vars(builtins)]
-                for module in [v for v in values if isinstance(v, types.ModuleType)]:
-                    if _genuine_module(module):  # an installed module: only the attributes the code names
-                        values += [vars(module)[n] for n in names if n in vars(module)]
-                values += [cell.cell_contents for cell in (obj.__closure__ or ()) if _has_contents(cell)]
-                values += list(obj.__defaults__ or ()) + list((obj.__kwdefaults__ or {}).values())
-                values += list(vars(obj).values())
-                stack.extend(values)
-            elif isinstance(obj, types.CodeType):
-                add_code(obj)
-            elif isinstance(obj, types.MethodType):
-                stack.extend([obj.__func__, obj.__self__])
-            elif isinstance(obj, functools.partial):
-                stack.extend([obj.func, *obj.args, *obj.keywords.values()])
-            elif isinstance(obj, (staticmethod, classmethod)):
-                stack.append(obj.__func__)
-            elif isinstance(obj, property):
-                stack.extend([obj.fget, obj.fset, obj.fdel])
-            elif isinstance(obj, type):
-                if not _genuine_module(sys.modules.get(obj.__module__)):
-                    for cls in obj.__mro__[:-1]:
-                        stack.extend(vars(cls).values())
-                else:
-                    stack.extend(v for v in vars(obj).values() if isinstance(v, (types.FunctionType, staticmethod,
-                                                                                  classmethod, property)))
-            elif isinstance(obj, types.ModuleType):
-                if not _genuine_module(obj):
-                    stack.extend(vars(obj).values())
-            elif isinstance(obj, dict):
-                stack.extend(list(obj.values())[:limit])
-            elif isinstance(obj, (list, tuple, set, frozenset)):
-                stack.extend(list(obj)[:limit])
-            elif isinstance(obj, (str, bytes, int, float, complex, bool)) or obj is None:
-                continue
-            else:
-                cls = type(obj)
-                if cls.__module__ not in ("numpy", "builtins"):
-                    stack.append(cls)
-                    stack.extend(list(getattr(obj, "__dict__", {}).values()))
-                    wrapped = getattr(obj, "__wrapped__", None) if not isinstance(obj, types.ModuleType) else None
-                    if wrapped is not None:
-                        stack.append(wrapped)
-        except Exception:  # an object that refuses to be looked at (a property that raises): skip it
-            continue
-    return codes
-
-
-def _has_contents(cell):
-    try:
-        cell.cell_contents
-    except ValueError:
-        return False
-    return True
-
-
-def recorder(library_prefix):
-    """An audit hook that keeps the code objects that start running while it is armed.
-
-    Returns ``(hook, arm, take)``: ``hook`` for :func:`sys.addaudithook`;
-    ``arm(flag)`` switches recording on or off; ``take()`` returns the code
-    recorded since the last ``take`` and forgets it. Recorded: the code of
-    ``exec``/``eval`` (but not the library's own modules being imported:
-    the worker's audit policy lets only its loaders run those), of
-    ``types.FunctionType(code, ...)`` and of ``function.__code__ = code``.
-    The state lives in the closure, not in attributes.
-    """
-    armed, recorded = [], []
-    CodeType = types.CodeType
-
-    def hook(event, args, armed=armed, recorded=recorded, CodeType=CodeType, isinstance=isinstance, len=len,
-             library_prefix=library_prefix):
-        if not armed:
-            return
-        if event in ("exec", "function.__new__"):
-            code = args[0] if args else None
-            if event == "exec" and isinstance(code, CodeType) and code.co_filename.startswith(library_prefix):
-                return  # the library's own module, run by the import system (others are refused)
-        elif event == "object.__setattr__" and len(args) >= 3 and args[1] == "__code__":
-            code = args[2]
-        else:
-            return
-        if isinstance(code, CodeType) and len(recorded) < 10000:
-            recorded.append(code)
-
-    def arm(flag):
-        armed[:] = [True] if flag else []
-
-    def take():
-        out = list(recorded)
-        recorded.clear()
-        return out
-
-    return hook, arm, take
-
-
 # -- the grader's side ------------------------------------------------------------------------------
 
 
@@ -412,9 +229,16 @@ class LibraryPrints:
         return found
 
 
+@functools.lru_cache(maxsize=16)
 def library_prints(forbidden):
-    """The :class:`LibraryPrints` of the forbidden library names (dotted names, see
-    :func:`particles.course.reading.forbidden.forbidden_code`), computed in this (the grader's) process."""
+    """The :class:`LibraryPrints` of the forbidden library names, computed in this (the grader's) process.
+
+    Parameters
+    ----------
+    forbidden : tuple of str
+        Dotted names (see :func:`particles.course.reading.forbidden.forbidden_code`); a tuple, so that each
+        exercise's are computed once.
+    """
     from ..reading.forbidden import forbidden_code
 
     return LibraryPrints(forbidden_code(forbidden))

@@ -30,7 +30,12 @@ the walls themselves live in :mod:`particles.course.walls.audit`:
 
 Then it serves requests: ``load`` (execute the selected statements of the
 notebook, each under a time limit) and ``call`` (call a function the
-submission defined, on inputs the test chose, under a time limit).
+submission defined, on inputs the test chose, under a time limit). A call's
+reply carries the fingerprints of the code it could run that the notebook did
+not define (:mod:`particles.course.worker.codewatch`: the grader checks that
+none is a forbidden library function read from its source), and no count of
+``f``: a counted ``f`` is evaluated by the grader itself
+(:mod:`particles.course.worker.registry`).
 
 This is a separate process with limits, not a security sandbox: the grader
 never trusts it. It decides pass/fail on the data the worker returns, kills
@@ -44,7 +49,7 @@ import time
 import types
 
 from ..walls import audit as sandbox
-from . import codeprints
+from . import codewatch
 
 __all__ = ["main"]
 
@@ -137,9 +142,6 @@ class _Server:
         registry.EVALUATE = self.evaluate  # functions the grader evaluates (and counts) on its side
         self.builtins = vars(builtins)
         self.pristine = dict(self.builtins)  # student code may replace builtins the worker itself needs
-        self.own, self.trusted, self.kept = set(), set(), []  # ids of the notebook's compiled code (kept alive)
-        self.recording = None  # (arm, take) of the code recorder, when the exercise forbids library code
-        self.sent = set()  # fingerprints whose shingles the grader already has
 
     def restore(self):
         """Put back any built-in the student's code replaced; return their names."""
@@ -186,7 +188,7 @@ class _Server:
         sys.stderr.flush()
         write_frame(self.proto_out, message, strict=False)
 
-    def load(self, request):
+    def load(self, request, watch=None):
         errors, compiled = [], []
         for chunk in request["chunks"]:  # all compiled first: the course's own cells are trusted before any runs
             source = "\n" * (int(chunk["line"]) - 1) + chunk["source"]
@@ -196,12 +198,8 @@ class _Server:
             except BaseException as error:  # a statement the grader's parser took but this Python does not
                 compiled.append((chunk, None))
                 errors.append(dict(_describe(error), label=chunk["label"]))
-        for chunk, code in compiled:  # the notebook's own code: never reported as the library's
-            for c in codeprints.nested(code) if code is not None else ():
-                self.own.add(id(c))
-                self.kept.append(c)
-                if chunk.get("provided"):
-                    self.trusted.add(id(c))
+        if watch is not None:  # the notebook's own code: never reported as the library's
+            watch.own_code(compiled)
         if sandbox.WIRES is not None:  # the cells the course provides may use what the exercise forbids
             sandbox.WIRES.trust([code for chunk, code in compiled if code is not None and chunk.get("provided")])
         for chunk, code in compiled:
@@ -219,23 +217,22 @@ class _Server:
         defined = sorted(k for k, v in self.namespace.items() if not k.startswith("__") and callable(v))
         return {"ok": True, "defined": defined, "errors": errors}
 
-    def call(self, request):
+    def call(self, request, watch=None):
         function = self.namespace.get(request["name"])
         if function is None or not callable(function):
             return {"ok": False, "error": {"type": "NotDefined", "message": request["name"], "where": ""}}
         args, kwargs = list(request.get("args", [])), dict(request.get("kwargs", {}))
-        reachable = self.reachable(function)
+        reachable = watch.reachable(function) if watch is not None else []
         start = time.perf_counter()
         try:
             _alarm(request.get("timeout", 5.0))
             try:
-                if self.recording:
-                    self.recording[1]()  # forget what ran before
-                    self.recording[0](True)
+                if watch is not None:
+                    watch.arm(True)
                 value = function(*args, **kwargs)
             finally:
-                if self.recording:
-                    self.recording[0](False)
+                if watch is not None:
+                    watch.arm(False)
                 _cancel_alarm()
                 changed = self.restore()
         except BaseException as error:
@@ -255,44 +252,12 @@ class _Server:
             "seconds": time.perf_counter() - start,
             "args_after": [after(v) for v in args],
             "kwargs_after": {k: after(v) for k, v in kwargs.items()},
-            "code": self.code_report(reachable),
+            "code": watch.report(reachable) if watch is not None else [],
         }  # no count of f: the grader counts the evaluations it answered (see registry)
 
-    def reachable(self, function):
-        """The code `function` can reach that the notebook did not compile (none when nothing is forbidden)."""
-        if not self.recording:
-            return []
-        try:
-            return codeprints.reachable_code(function, own=self.own, trusted=self.trusted)
-        except BaseException:  # an object of the student's that refuses to be looked at
-            return []
-
-    def code_report(self, reachable):
-        """Fingerprints of the foreign code of a call: what it can reach, and what started running during it.
-
-        The grader decides whether any is the library's (see :mod:`particles.course.worker.codeprints`).
-        """
-        if not self.recording:
-            return []
-        ran = [c for code in self.recording[1]() for c in codeprints.nested(code)]
-        records, done = [], set()
-        for code in list(reachable) + ran:
-            if id(code) in self.own or len(records) >= 5000:
-                continue
-            try:
-                record = codeprints.describe(code, with_shingles=False)
-                if record["fp"] in done:
-                    continue
-                done.add(record["fp"])
-                if record["fp"] not in self.sent and record["size"] > codeprints.FUZZY_MIN:
-                    record = codeprints.describe(code)
-                    self.sent.add(record["fp"])
-            except Exception:  # a code object dis cannot read (made by hand): nothing to compare
-                continue
-            records.append(record)
-        return records
-
-    def serve(self):
+    def serve(self, watch=None):
+        """Answer requests until the grader closes the pipe; `watch` (a :class:`~particles.course.worker.codewatch.CodeWatch`) is kept in this
+        frame only, out of reach of the objects the submission can get hold of."""
         from .protocol import read_frame
 
         while True:
@@ -303,9 +268,9 @@ class _Server:
             try:
                 op = request.get("op")
                 if op == "load":
-                    answer = self.load(request)
+                    answer = self.load(request, watch)
                 elif op == "call":
-                    answer = self.call(request)
+                    answer = self.call(request, watch)
                 elif op == "ping":
                     answer = {"ok": True, "pid": os.getpid()}
                 elif op == "exit":
@@ -377,11 +342,12 @@ def main(argv=None):
         config = read_frame(server.read_exactly)
     except EOFError:
         return 0
-    if config.get("forbidden"):  # code that starts running during a call: the grader checks it is not the library's
+    watch = None
+    if config.get("forbidden"):  # the foreign code of each call: the grader checks it is not the library's
         library = os.path.abspath(os.path.join(os.path.dirname(__file__), os.pardir, os.pardir)) + os.sep
-        hook, arm, take = codeprints.recorder(library)
+        hook, arm, take = codewatch.recorder(library)
         sys.addaudithook(hook)
-        server.recording = (arm, take)
+        watch = codewatch.CodeWatch(arm, take)
     wires = sandbox.WIRES = sandbox.Tripwires(config.get("forbidden", {}))
     sys.meta_path.insert(0, wires)
     wires.wire()
@@ -404,7 +370,8 @@ def main(argv=None):
     layers["audit_hook"] = bool(config.get("audit_hook", True))
     del wires
     write_frame(proto_out, {"ok": True, "pid": os.getpid(), "layers": layers})
-    server.serve()
+    server.serve(watch)
+    del watch
     return 0
 
 

@@ -48,7 +48,7 @@ import numpy as np
 
 from ...problems import PROBLEMS, get_problem
 
-__all__ = ["RemoteFunction", "remote", "build", "CountingFunction", "GraderFunction"]
+__all__ = ["RemoteFunction", "remote", "build", "CountingFunction", "GraderFunction", "Token", "answer_evaluation"]
 
 _ATTRIBUTES = ("f", "exact")
 
@@ -177,3 +177,30 @@ class RemoteFunction:
 def remote(name, attr="f", counted=False, **params):
     """Shorthand for :class:`RemoteFunction`: ``remote("harmonic_oscillator", omega=2.0)``."""
     return RemoteFunction(name, attr, counted, **params)
+
+
+class Token:
+    """What the worker receives for a counted function: an opaque token (encoded as a callable spec)."""
+
+    def __init__(self, token):
+        self.__remote_spec__ = {"kind": "grader", "token": token}
+
+    def __call__(self, *args, **kwargs):  # never called: only sent
+        raise RuntimeError("a token stands for a function the grader evaluates")
+
+
+def answer_evaluation(counted, frame):
+    """The grader's answer to a worker's ``{"op": "evaluate"}`` frame: the value, and one more call counted.
+
+    `counted` maps the tokens of this call to ``[RemoteFunction, count, position]``.
+    """
+    entry = counted.get(frame.get("token")) if isinstance(frame.get("token"), str) else None
+    if entry is None:
+        return {"ok": False, "error": "not a function of this call"}
+    entry[1] += 1
+    args = frame.get("args") if isinstance(frame.get("args"), list) else []
+    kwargs = frame.get("kwargs") if isinstance(frame.get("kwargs"), dict) else {}
+    try:
+        return {"ok": True, "value": entry[0](*args, **kwargs)}
+    except Exception as error:  # bad arguments from the student's code: their error, raised in their code
+        return {"ok": False, "error": f"{type(error).__name__}: {error}"}

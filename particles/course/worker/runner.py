@@ -28,7 +28,7 @@ from ..walls.limits import DEFAULTS, GRACE, check_limit, limits as all_limits
 from .process import Worker, WorkerDied, WorkerTimeout
 from .protocol import ProtocolError, Unsupported
 from .codeprints import library_prints
-from .registry import RemoteFunction
+from .registry import RemoteFunction, Token, answer_evaluation
 
 __all__ = ["GradingFailure", "Submission", "DEFAULTS", "describe_value", "check_limit"]
 
@@ -301,7 +301,7 @@ class Submission:
         counted = {}
         args = [self._count(key, value, counted) for key, value in enumerate(args)]
         kwargs = {key: self._count(key, value, counted) for key, value in kwargs.items()}
-        self.worker.evaluate = functools.partial(_evaluate, counted)
+        self.worker.evaluate = functools.partial(answer_evaluation, counted)
         request = {"op": "call", "name": name, "args": list(args), "kwargs": kwargs, "timeout": limit}
         try:
             reply = self.worker.request(request, limit + _GRACE)
@@ -330,15 +330,14 @@ class Submission:
         if isinstance(value, RemoteFunction) and value.counted:
             token = secrets.token_hex(12)
             counted[token] = [value, 0, str(key)]
-            return _Token(token)
+            return Token(token)
         return value
 
     def calls_of(self, position):
         """How often the last call evaluated the counted function passed at `position` (int or keyword).
 
-        The grader's own count: every evaluation it answered during that call
-        (see :mod:`particles.course.worker.registry`); nothing the worker says
-        enters it.
+        The grader's own count: the evaluations it answered during that call
+        (:mod:`particles.course.worker.registry`), nothing the worker says.
 
         Raises
         ------
@@ -354,15 +353,11 @@ class Submission:
         return calls[str(position)]
 
     def _check_library_code(self, name, records):
-        """Fail when the call ran a forbidden library function's code (read from its source and run, or copied).
-
-        The worker reports fingerprints of the code the call could reach or started
-        running that the notebook did not define; the library's are computed here, from
-        the installed library (see :mod:`particles.course.worker.codeprints`).
-        """
+        """Fail when the call could run a forbidden library function's code, however it was loaded (the worker
+        reports fingerprints, the library's are computed here: :mod:`particles.course.worker.codeprints`)."""
         if not self.forbidden or not isinstance(records, list):
             return
-        prints = _library_prints(tuple(sorted(self.forbidden)))
+        prints = library_prints(tuple(sorted(self.forbidden)))
         for record in records[:5000]:
             hit = prints.match(record)
             if hit:
@@ -386,36 +381,6 @@ class Submission:
                     f"`{name}` modified its input `{label}` in place; leave the arrays it is given unchanged "
                     f"and return a new array (e.g. start from `{label}.copy()` or build the result with `+`)"
                 )
-
-
-@functools.lru_cache(maxsize=16)
-def _library_prints(forbidden):
-    """The fingerprints of the forbidden library code (a tuple of dotted names), computed once per grader."""
-    return library_prints(forbidden)
-
-
-class _Token:
-    """What the worker receives for a counted function: an opaque token (encoded as a callable spec)."""
-
-    def __init__(self, token):
-        self.__remote_spec__ = {"kind": "grader", "token": token}
-
-    def __call__(self, *args, **kwargs):  # never called: only sent
-        raise RuntimeError("a token stands for a function the grader evaluates")
-
-
-def _evaluate(counted, frame):
-    """The grader's answer to a worker's ``{"op": "evaluate"}`` frame: the value, and one more call counted."""
-    entry = counted.get(frame.get("token")) if isinstance(frame.get("token"), str) else None
-    if entry is None:
-        return {"ok": False, "error": "not a function of this call"}
-    entry[1] += 1
-    args = frame.get("args") if isinstance(frame.get("args"), list) else []
-    kwargs = frame.get("kwargs") if isinstance(frame.get("kwargs"), dict) else {}
-    try:
-        return {"ok": True, "value": entry[0](*args, **kwargs)}
-    except Exception as error:  # bad arguments from the student's code: their error, raised in their code
-        return {"ok": False, "error": f"{type(error).__name__}: {error}"}
 
 
 def describe_value(value):

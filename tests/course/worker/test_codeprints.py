@@ -1,10 +1,7 @@
 """Fingerprints of compiled code: the library's forbidden functions recognised by what runs, honest code never."""
 
-import functools
 import inspect
 import re
-import subprocess
-import sys
 import textwrap
 import types
 
@@ -14,7 +11,7 @@ import pytest
 import particles.integrators.steppers as steppers
 from particles.course.reading.forbidden import forbidden_code
 from particles.course.worker import codeprints
-from particles.course.worker.codeprints import LibraryPrints, fingerprint, library_prints, reachable_code
+from particles.course.worker.codeprints import LibraryPrints, fingerprint, library_prints
 
 FORBIDDEN = ("particles.integrators.euler", "particles.integrators.midpoint", "particles.integrators.rk4",
              "particles.forces.Gravity", "particles.studies.order.fit_order")
@@ -135,7 +132,7 @@ def test_short_library_code_is_never_matched():
     """Library code of fewer than MIN_TOKENS tokens is left out: an honest student writes the same."""
     tiny = _functions("def n(self):\n    return len(self.X)", "n")
     assert codeprints.describe(tiny.__code__)["size"] < codeprints.MIN_TOKENS
-    assert len(LibraryPrints([("particles.x.n", "particles.x", tiny.__code__)])) == 0
+    assert len(LibraryPrints([("tiny.n", "tiny", tiny.__code__)])) == 0
 
 
 def test_forbidden_code_lists_functions_methods_and_modules():
@@ -147,53 +144,3 @@ def test_forbidden_code_lists_functions_methods_and_modules():
     assert "particles.studies.order.fit_order" in labels
     assert not any("THEORY_OMEGA_H" in label for label in labels)
     assert all(isinstance(code, types.CodeType) for _, _, code in found)
-
-
-def test_reachable_code_follows_what_a_function_can_run():
-    """Globals, dicts, closures, partials, classes and made-up modules are followed; installed functions are not."""
-    copy = _steppers_copy()
-    module = types.ModuleType("mine")
-    module.rk4 = copy["rk4"]
-    namespace = {"np": np, "TABLE": {"a": [copy["euler"]]}, "mod": module,
-                 "PART": functools.partial(copy["midpoint"], None)}
-    exec("def graded(f, X, t, h):\n    return TABLE['a'][0](f, X, t, h) + mod.x + PART(X, t, h) + np.sum(X)",
-         namespace)
-    codes = reachable_code(namespace["graded"], own={id(namespace["graded"].__code__)})
-    found = {c.co_name for c in codes}
-    assert {"euler", "rk4", "midpoint"} <= found and "graded" not in found
-    assert "check_arguments" in found  # the installed library's helper is reported, not descended into
-    assert "as_float_array" not in found
-    closure = (lambda g: lambda *a: g(*a))(copy["trapezoid"])
-    assert "trapezoid" in {c.co_name for c in reachable_code(closure)}
-
-
-def test_reachable_code_does_not_descend_into_trusted_code():
-    """A function of the course's own cells (trusted) is neither reported nor followed."""
-    copy = _steppers_copy()
-    namespace = {"EULER": copy["euler"]}
-    exec("def provided(f, X, t, h):\n    return EULER(f, X, t, h)", namespace)
-    trusted = {id(namespace["provided"].__code__)}
-    assert reachable_code(namespace["provided"], trusted=trusted) == []
-
-
-def test_the_recorder_sees_code_that_starts_running_while_armed():
-    """exec, FunctionType and __code__ = are recorded while armed, not before; the library's imports are not."""
-    script = textwrap.dedent('''
-        import sys, types
-        from particles.course.worker import codeprints
-        hook, arm, take = codeprints.recorder("/library/")
-        sys.addaudithook(hook)
-        exec("def before(): pass", {})
-        arm(True)
-        exec(compile("def inside(): pass", "<mine>", "exec"), {})
-        made = types.FunctionType((lambda: 1).__code__, {})
-        def g(): pass
-        g.__code__ = (lambda: 2).__code__
-        exec(compile("x = 1", "/library/module.py", "exec"), {})
-        arm(False)
-        exec("def after(): pass", {})
-        print(sorted(c.co_name for c in take()), take())
-    ''')
-    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60,
-                         cwd=str(__import__("pathlib").Path(__file__).resolve().parents[3]))
-    assert out.stdout.strip() == "['<lambda>', '<lambda>', '<module>'] []", out.stderr
