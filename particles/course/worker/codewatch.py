@@ -68,25 +68,32 @@ def _genuine_module(module):
 
 
 def _genuine_function(function):
-    """True for a function of an installed module (its globals are that module's own dict)."""
+    """``"original"`` for a function as its installed module defined it (its globals are that module's own
+    dict, its code from that module's file), ``"installed"`` for another function with such globals, else ""."""
     globals_ = function.__globals__
     module = sys.modules.get(globals_.get("__name__")) if isinstance(globals_.get("__name__"), str) else None
-    return module is not None and getattr(module, "__dict__", None) is globals_ and _genuine_module(module)
+    if module is None or getattr(module, "__dict__", None) is not globals_ or not _genuine_module(module):
+        return ""
+    file = getattr(module, "__file__", None)
+    return "original" if file is not None and function.__code__.co_filename == file else "installed"
 
 
-def reachable_code(root, own=(), trusted=(), limit=20000):
+def reachable_code(root, own=(), trusted=(), created=(), limit=20000):
     """The code objects that `root` (a function or any callable) can run, as far as its references tell.
 
     Follows functions (code, nested code, the globals their code names,
     closures, defaults, ``__wrapped__``), methods, ``functools.partial``,
     classes and instances (their methods), modules a submission made (all of
     them; of an installed module only the attributes the code names),
-    dicts, lists, tuples and sets. It does not descend into functions of
-    installed modules, but reports their code (a library function re-run
-    into an installed module's dict is still seen), nor into the functions
-    whose code is in `trusted` (ids of the course's own code). Code whose id
-    is in `own` (the notebook's own statements, compiled by the worker) is
-    followed but not reported.
+    dicts, lists, tuples and sets. It neither reports nor follows the
+    functions of installed modules as they defined them (their code is the
+    tripwires' and the name check's business), nor the functions whose code
+    is in `trusted` (ids of the course's own code); it reports but does not
+    follow other functions of an installed module's dict (a library module
+    run again into its own dict), and the originals whose code is in
+    `created` (ids of code the submission made while the notebook loaded).
+    Code whose id is in `own` (the notebook's own statements, compiled by the
+    worker) is followed but not reported.
 
     Returns
     -------
@@ -96,7 +103,7 @@ def reachable_code(root, own=(), trusted=(), limit=20000):
     import builtins
     import functools
 
-    trusted = set(trusted)
+    trusted, created = set(trusted), set(created)
     skip = trusted | set(own)
     seen, found, codes = set(), {}, []
     stack = [root]
@@ -117,8 +124,11 @@ def reachable_code(root, own=(), trusted=(), limit=20000):
                 code = obj.__code__
                 if id(code) in trusted:
                     continue
+                kind = _genuine_function(obj)
+                if kind == "original" and id(code) not in created:
+                    continue
                 add_code(code)
-                if _genuine_function(obj):
+                if kind:
                     continue
                 names = {n for c in nested(code) for n in c.co_names}
                 values = [obj.__globals__[n] for n in names if n in obj.__globals__]
@@ -228,7 +238,8 @@ class CodeWatch:
     Notes
     -----
     ``own_code`` learns the notebook's compiled statements (kept alive, known by
-    id; the provided cells' are trusted too); ``reachable`` lists the foreign
+    id; the provided cells' are trusted too); ``loaded`` keeps the foreign code
+    that started running while they ran; ``reachable`` lists the foreign
     code a function can reach before it is called; ``arm`` switches the
     recorder of code that starts running on and off; ``report`` gives the
     fingerprints the grader checks.
@@ -236,8 +247,17 @@ class CodeWatch:
 
     def __init__(self, arm, take):
         self._arm, self._take = arm, take
-        self.own, self.trusted, self.kept = set(), set(), []
+        self.own, self.trusted, self.created, self.kept = set(), set(), set(), []
         self.sent = set()  # fingerprints whose shingles the grader already has
+
+    def loaded(self):
+        """Remember the foreign code that started running while the notebook loaded (recorder armed meanwhile)."""
+        self._arm(False)
+        for code in self._take():
+            for c in nested(code):
+                if id(c) not in self.own:
+                    self.created.add(id(c))
+                    self.kept.append(c)
 
     def own_code(self, compiled):
         """Learn the notebook's compiled statements: ``(chunk, code)`` pairs, ``chunk["provided"]`` trusted."""
@@ -251,7 +271,7 @@ class CodeWatch:
     def reachable(self, function):
         """The foreign code `function` can reach (:func:`reachable_code`)."""
         try:
-            return reachable_code(function, own=self.own, trusted=self.trusted)
+            return reachable_code(function, own=self.own, trusted=self.trusted, created=self.created)
         except BaseException:  # an object of the student's that refuses to be looked at
             return []
 

@@ -200,6 +200,7 @@ class _Server:
                 errors.append(dict(_describe(error), label=chunk["label"]))
         if watch is not None:  # the notebook's own code: never reported as the library's
             watch.own_code(compiled)
+            watch.arm(True)  # and what else starts running while it loads
         if sandbox.WIRES is not None:  # the cells the course provides may use what the exercise forbids
             sandbox.WIRES.trust([code for chunk, code in compiled if code is not None and chunk.get("provided")])
         for chunk, code in compiled:
@@ -214,6 +215,8 @@ class _Server:
                     self.restore()
             except BaseException as error:  # the student's code may raise anything, even SystemExit
                 errors.append(dict(_describe(error), label=chunk["label"]))
+        if watch is not None:
+            watch.loaded()
         defined = sorted(k for k, v in self.namespace.items() if not k.startswith("__") and callable(v))
         return {"ok": True, "defined": defined, "errors": errors}
 

@@ -36,8 +36,21 @@ def test_reachable_code_follows_what_a_function_can_run():
     codes = reachable_code(namespace["graded"], own={id(namespace["graded"].__code__)})
     found = {c.co_name for c in codes}
     assert {"euler", "rk4", "midpoint"} <= found and "graded" not in found
-    assert "check_arguments" in found  # the installed library's helper is reported, not descended into
-    assert "as_float_array" not in found
+    assert "check_arguments" not in found  # the installed library's own helper: the tripwires' business
+    closure = (lambda g: lambda *a: g(*a))(copy["trapezoid"])
+    assert "trapezoid" in {c.co_name for c in reachable_code(closure)}
+
+
+def test_reachable_code_reports_copies_run_in_an_installed_module():
+    """A copy run with an installed module's globals is reported (not followed); an original only when made at load."""
+    import particles.integrators.common as common
+
+    copy = _steppers_copy()
+    in_module = types.FunctionType(copy["euler"].__code__, vars(common))
+    assert [c.co_name for c in reachable_code(in_module)] == ["euler"]
+    assert reachable_code(steppers.euler) == []
+    made = types.FunctionType(steppers.euler.__code__, vars(steppers))  # the original code, made anew at load
+    assert [c.co_name for c in reachable_code(made, created={id(steppers.euler.__code__)})] == ["euler"]
     closure = (lambda g: lambda *a: g(*a))(copy["trapezoid"])
     assert "trapezoid" in {c.co_name for c in reachable_code(closure)}
 
