@@ -8,8 +8,9 @@ Every way a call can go wrong becomes a :class:`GradingFailure` (an
 ``AssertionError``, so pytest records a failed test) with one line the student
 can act on: the function is missing or uses a forbidden library call, it runs
 a forbidden library function's code read from the library's source (known by
-its compiled code, :mod:`particles.course.worker.codeprints`), it raised, it ran past its time limit, it ended or crashed the worker, or it
-returned something the protocol cannot carry. After a timeout or a crash the
+its compiled code, :mod:`particles.course.worker.codeprints`), it raised, it
+ran past its time limit, it ended or crashed the worker, or it returned
+something the protocol cannot carry. After a timeout or a crash the
 worker is killed and the next call starts a fresh one.
 """
 
