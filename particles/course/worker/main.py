@@ -31,11 +31,9 @@ the walls themselves live in :mod:`particles.course.walls.audit`:
 Then it serves requests: ``load`` (execute the selected statements of the
 notebook, each under a time limit) and ``call`` (call a function the
 submission defined, on inputs the test chose, under a time limit). A call's
-reply carries the fingerprints of the code it could run that the notebook did
-not define (:mod:`particles.course.worker.codewatch`: the grader checks that
-none is a forbidden library function read from its source), and no count of
-``f``: a counted ``f`` is evaluated by the grader itself
-(:mod:`particles.course.worker.registry`).
+reply carries the fingerprints of the foreign code it could run
+(:mod:`particles.course.worker.codewatch`), and no count of ``f``: a counted
+``f`` is evaluated by the grader (:mod:`particles.course.worker.registry`).
 
 This is a separate process with limits, not a security sandbox: the grader
 never trusts it. It decides pass/fail on the data the worker returns, kills
@@ -259,8 +257,8 @@ class _Server:
         }  # no count of f: the grader counts the evaluations it answered (see registry)
 
     def serve(self, watch=None):
-        """Answer requests until the grader closes the pipe; `watch` (a :class:`~particles.course.worker.codewatch.CodeWatch`) is kept in this
-        frame only, out of reach of the objects the submission can get hold of."""
+        """Answer requests until the grader closes the pipe; `watch` (a ``CodeWatch``) lives in this frame only,
+        not on the server, which the submission can reach (``registry.EVALUATE.__self__``)."""
         from .protocol import read_frame
 
         while True:

@@ -366,7 +366,8 @@ class Submission:
                 label, forbidden = hit
                 raise GradingFailure(
                     f"`{name}` runs the library's code, not yours: this is the library's `{label}` (recognised by "
-                    f"its compiled code, however it was loaded), which this exercise forbids: {self.forbidden[forbidden]}"
+                    f"its compiled code, however it was loaded), which this exercise forbids: "
+                    f"{self.forbidden[forbidden]}"
                 )
 
     def _check_inputs(self, name, args, kwargs, reply):

@@ -114,7 +114,8 @@ def test_a_class_method_copy_names_the_class(prints):
 
 @pytest.mark.parametrize("source", [
     "def euler_step(f, X, t, h):\n    return X + h * f(X, t)",
-    "def euler(f, X, t, h):\n    X = np.asarray(X, float)\n    return X + h * np.asarray(f(X, t))",  # the library's name
+    # the library's name, the library's shape
+    "def euler(f, X, t, h):\n    X = np.asarray(X, float)\n    return X + h * np.asarray(f(X, t))",
     "def midpoint_step(f, X, t, h):\n    X_m = X + 0.5 * h * f(X, t)\n    return X + h * f(X_m, t + 0.5 * h)",
     "def rk4_step(f, X, t, h):\n    k1 = f(X, t)\n    k2 = f(X + 0.5 * h * k1, t + 0.5 * h)\n"
     "    k3 = f(X + 0.5 * h * k2, t + 0.5 * h)\n    k4 = f(X + h * k3, t + h)\n"
