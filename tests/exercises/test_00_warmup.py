@@ -91,7 +91,7 @@ def test_euler_step_oscillator(student):
 @pytest.mark.points(1)
 def test_euler_step_leaves_X_unchanged(student):
     """euler_step returns a new array holding the step, without modifying X or calling f more than once."""
-    f = remote("harmonic_oscillator", omega=1.0)
+    f = remote("harmonic_oscillator", omega=1.0, counted=True)  # the grader evaluates f, and counts
     X = np.array([[[1.0], [0.0]], [[0.0], [1.0]]])
     got = student.call("euler_step", f, X, 0.0, 0.1, check_inputs=True)
     expect_array(got, euler(f, X, 0.0, 0.1), "euler_step(f, X of shape (2, 2, 1), t=0, h=0.1) on the oscillator "

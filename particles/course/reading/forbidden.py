@@ -17,6 +17,11 @@ Uses are followed through the submission's own functions, classes and
 constants (``STEPPERS = {"euler": euler}``). Dynamic tricks (``importlib``
 with computed strings) are caught at run time by the worker's tripwires
 (:mod:`particles.course.walls.audit`).
+
+A submission that runs the library's *source* (read from its files and
+``exec``-ed) defines functions of its own that no name check sees; those are
+recognised by their compiled code (:mod:`particles.course.worker.codeprints`),
+against the code of the forbidden objects that :func:`forbidden_code` lists.
 """
 
 import ast
@@ -24,7 +29,7 @@ import importlib
 
 from .scopes import dotted
 
-__all__ = ["forbidden_uses"]
+__all__ = ["forbidden_uses", "forbidden_code"]
 
 
 def _resolve_object(name):
@@ -145,3 +150,52 @@ def _match(used, targets):
                 if target is not None and obj is target:
                     return f
     return None
+
+
+def forbidden_code(forbidden):
+    """The compiled code of the forbidden library objects, as installed: what a copy of them would run.
+
+    Parameters
+    ----------
+    forbidden : iterable of str
+        Dotted names: a function (``"particles.integrators.euler"``), a class
+        (each of its methods), or a module (each function and class defined
+        in it). Other objects (constants, dicts) have no code and are left out.
+
+    Returns
+    -------
+    list of tuple
+        ``(label, forbidden name, code)``, e.g.
+        ``("particles.forces.Gravity.add_to", "particles.forces.Gravity", <code>)``.
+    """
+    import inspect
+    import types
+
+    out, seen = [], set()
+
+    def add(label, name, obj, depth=0):
+        if isinstance(obj, (staticmethod, classmethod)):
+            obj = obj.__func__
+        elif isinstance(obj, property):
+            for part, fn in (("fget", obj.fget), ("fset", obj.fset)):
+                if fn is not None:
+                    add(f"{label}.{part}", name, fn, depth)
+            return
+        if isinstance(obj, types.FunctionType):
+            obj = inspect.unwrap(obj)
+            if id(obj.__code__) not in seen:
+                seen.add(id(obj.__code__))
+                out.append((label, name, obj.__code__))
+        elif isinstance(obj, type) and depth < 2:
+            for key, value in vars(obj).items():
+                add(f"{label}.{key}", name, value, depth + 1)
+        elif isinstance(obj, types.ModuleType) and depth == 0:
+            for key, value in vars(obj).items():
+                if getattr(value, "__module__", None) == obj.__name__ and isinstance(value, (type, types.FunctionType)):
+                    add(f"{label}.{key}", name, value, depth + 1)
+
+    for name in forbidden:
+        obj = _resolve_object(name)
+        if obj is not None:
+            add(name, name, obj)
+    return out

@@ -11,5 +11,9 @@ Modules:
 * :mod:`~particles.course.worker.runner`: the tests' handle on a submission (``student.call(...)``),
   failures as one-line reasons;
 * :mod:`~particles.course.worker.registry`: test problems and functions passed to student code by
-  name.
+  name; counted ones evaluated (and counted) by the grader;
+* :mod:`~particles.course.worker.codeprints`: fingerprints of compiled code, to recognise the library's
+  forbidden functions however a submission ran them;
+* :mod:`~particles.course.worker.codewatch`: in the worker, the code a call could run besides the
+  notebook's own (what it reaches, what starts running during it).
 """

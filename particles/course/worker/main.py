@@ -30,7 +30,10 @@ the walls themselves live in :mod:`particles.course.walls.audit`:
 
 Then it serves requests: ``load`` (execute the selected statements of the
 notebook, each under a time limit) and ``call`` (call a function the
-submission defined, on inputs the test chose, under a time limit).
+submission defined, on inputs the test chose, under a time limit). A call's
+reply carries the fingerprints of the foreign code it could run
+(:mod:`particles.course.worker.codewatch`), and no count of ``f``: a counted
+``f`` is evaluated by the grader (:mod:`particles.course.worker.registry`).
 
 This is a separate process with limits, not a security sandbox: the grader
 never trusts it. It decides pass/fail on the data the worker returns, kills
@@ -44,6 +47,7 @@ import time
 import types
 
 from ..walls import audit as sandbox
+from . import codewatch
 
 __all__ = ["main"]
 
@@ -130,6 +134,9 @@ class _Server:
 
         from . import registry
 
+        import threading
+
+        self.evaluating = threading.Lock()
         registry.EVALUATE = self.evaluate  # functions the grader evaluates (and counts) on its side
         self.builtins = vars(builtins)
         self.pristine = dict(self.builtins)  # student code may replace builtins the worker itself needs
@@ -152,15 +159,21 @@ class _Server:
             remaining -= len(chunk)
         return b"".join(chunks)
 
-    def evaluate(self, spec, args, kwargs):
-        """Have the grader evaluate the registry function `spec` on `args` (one round trip); return its value."""
+    def evaluate(self, token, args, kwargs):
+        """Have the grader evaluate its function `token` on `args` (one round trip); return the value.
+
+        The round trips of several threads are serialised (one lock), so that
+        their frames never interleave on the pipe.
+        """
         from .protocol import ProtocolError, read_frame, write_frame
 
-        try:
-            write_frame(self.proto_out, {"op": "evaluate", "spec": spec, "args": list(args), "kwargs": dict(kwargs)})
-        except ProtocolError as error:
-            raise TypeError(f"f must be called with numbers and NumPy arrays: {error}") from None
-        answer = read_frame(self.read_exactly)
+        with self.evaluating:
+            try:
+                write_frame(self.proto_out, {"op": "evaluate", "token": token, "args": list(args),
+                                             "kwargs": dict(kwargs)})
+            except ProtocolError as error:
+                raise TypeError(f"f must be called with numbers and NumPy arrays: {error}") from None
+            answer = read_frame(self.read_exactly)
         if not isinstance(answer, dict) or not answer.get("ok"):
             message = answer.get("error") if isinstance(answer, dict) else "no answer"
             raise ValueError(f"f could not be evaluated: {message}")
@@ -173,7 +186,7 @@ class _Server:
         sys.stderr.flush()
         write_frame(self.proto_out, message, strict=False)
 
-    def load(self, request):
+    def load(self, request, watch=None):
         errors, compiled = [], []
         for chunk in request["chunks"]:  # all compiled first: the course's own cells are trusted before any runs
             source = "\n" * (int(chunk["line"]) - 1) + chunk["source"]
@@ -183,6 +196,9 @@ class _Server:
             except BaseException as error:  # a statement the grader's parser took but this Python does not
                 compiled.append((chunk, None))
                 errors.append(dict(_describe(error), label=chunk["label"]))
+        if watch is not None:  # the notebook's own code: never reported as the library's
+            watch.own_code(compiled)
+            watch.arm(True)  # and what else starts running while it loads
         if sandbox.WIRES is not None:  # the cells the course provides may use what the exercise forbids
             sandbox.WIRES.trust([code for chunk, code in compiled if code is not None and chunk.get("provided")])
         for chunk, code in compiled:
@@ -197,22 +213,27 @@ class _Server:
                     self.restore()
             except BaseException as error:  # the student's code may raise anything, even SystemExit
                 errors.append(dict(_describe(error), label=chunk["label"]))
+        if watch is not None:
+            watch.loaded()
         defined = sorted(k for k, v in self.namespace.items() if not k.startswith("__") and callable(v))
         return {"ok": True, "defined": defined, "errors": errors}
 
-    def call(self, request):
-        from .registry import CountingFunction
-
+    def call(self, request, watch=None):
         function = self.namespace.get(request["name"])
         if function is None or not callable(function):
             return {"ok": False, "error": {"type": "NotDefined", "message": request["name"], "where": ""}}
         args, kwargs = list(request.get("args", [])), dict(request.get("kwargs", {}))
+        reachable = watch.reachable(function) if watch is not None else []
         start = time.perf_counter()
         try:
             _alarm(request.get("timeout", 5.0))
             try:
+                if watch is not None:
+                    watch.arm(True)
                 value = function(*args, **kwargs)
             finally:
+                if watch is not None:
+                    watch.arm(False)
                 _cancel_alarm()
                 changed = self.restore()
         except BaseException as error:
@@ -226,20 +247,18 @@ class _Server:
         def after(v):
             return v if isinstance(v, np.ndarray) else None
 
-        counts = {}
-        for key, v in list(enumerate(args)) + list(kwargs.items()):
-            if isinstance(v, CountingFunction):
-                counts[str(key)] = v.calls
         return {
             "ok": True,
             "value": value,
             "seconds": time.perf_counter() - start,
             "args_after": [after(v) for v in args],
             "kwargs_after": {k: after(v) for k, v in kwargs.items()},
-            "calls": counts,
-        }
+            "code": watch.report(reachable) if watch is not None else [],
+        }  # no count of f: the grader counts the evaluations it answered (see registry)
 
-    def serve(self):
+    def serve(self, watch=None):
+        """Answer requests until the grader closes the pipe; `watch` (a ``CodeWatch``) lives in this frame only,
+        not on the server, which the submission can reach (``registry.EVALUATE.__self__``)."""
         from .protocol import read_frame
 
         while True:
@@ -250,9 +269,9 @@ class _Server:
             try:
                 op = request.get("op")
                 if op == "load":
-                    answer = self.load(request)
+                    answer = self.load(request, watch)
                 elif op == "call":
-                    answer = self.call(request)
+                    answer = self.call(request, watch)
                 elif op == "ping":
                     answer = {"ok": True, "pid": os.getpid()}
                 elif op == "exit":
@@ -324,6 +343,12 @@ def main(argv=None):
         config = read_frame(server.read_exactly)
     except EOFError:
         return 0
+    watch = None
+    if config.get("forbidden"):  # the foreign code of each call: the grader checks it is not the library's
+        library = os.path.abspath(os.path.join(os.path.dirname(__file__), os.pardir, os.pardir)) + os.sep
+        hook, arm, take = codewatch.recorder(library)
+        sys.addaudithook(hook)
+        watch = codewatch.CodeWatch(arm, take)
     wires = sandbox.WIRES = sandbox.Tripwires(config.get("forbidden", {}))
     sys.meta_path.insert(0, wires)
     wires.wire()
@@ -346,7 +371,8 @@ def main(argv=None):
     layers["audit_hook"] = bool(config.get("audit_hook", True))
     del wires
     write_frame(proto_out, {"ok": True, "pid": os.getpid(), "layers": layers})
-    server.serve()
+    server.serve(watch)
+    del watch
     return 0
 
 

@@ -6,15 +6,17 @@
 
 Every way a call can go wrong becomes a :class:`GradingFailure` (an
 ``AssertionError``, so pytest records a failed test) with one line the student
-can act on: the function is missing or uses a forbidden library call, it
-raised, it ran past its time limit, it ended or crashed the worker, or it
-returned something the protocol cannot carry. After a timeout or a crash the
+can act on: the function is missing or uses a forbidden library call, it runs
+a forbidden library function's code read from the library's source (known by
+its compiled code, :mod:`particles.course.worker.codeprints`), it raised, it
+ran past its time limit, it ended or crashed the worker, or it returned
+something the protocol cannot carry. After a timeout or a crash the
 worker is killed and the next call starts a fresh one.
 """
 
-import copy
 import functools
 import os
+import secrets
 import shutil
 import signal
 import tempfile
@@ -27,7 +29,8 @@ from ..reading.submission import SubmissionCode, read_submission
 from ..walls.limits import DEFAULTS, GRACE, check_limit, limits as all_limits
 from .process import Worker, WorkerDied, WorkerTimeout
 from .protocol import ProtocolError, Unsupported
-from .registry import RemoteFunction
+from .codeprints import library_prints
+from .registry import RemoteFunction, Token, answer_evaluation
 
 __all__ = ["GradingFailure", "Submission", "DEFAULTS", "describe_value", "check_limit"]
 
@@ -106,8 +109,9 @@ class Submission:
         see :func:`particles.course.walls.isolation.describe`).
     last : dict
         Details of the last successful call: ``seconds``, and ``calls``
-        (argument position -> how often the student's code called that
-        registry function).
+        (argument position -> how often the student's code evaluated the
+        function passed there with ``remote(..., counted=True)``, as the
+        grader counted it).
     """
 
     def __init__(self, source, forbidden=None, deny=(), scratch=None, python=None, isolation=None,
@@ -283,6 +287,7 @@ class Submission:
             With one line saying what went wrong.
         """
         self.called.append(name)
+        self.last = {}  # a count is never read from an earlier call
         if self.load_failure:
             raise GradingFailure(self.load_failure)
         uses = self.code.forbidden_uses(name, self.forbidden)
@@ -298,7 +303,7 @@ class Submission:
         counted = {}
         args = [self._count(key, value, counted) for key, value in enumerate(args)]
         kwargs = {key: self._count(key, value, counted) for key, value in kwargs.items()}
-        self.worker.evaluate = functools.partial(_evaluate, counted)
+        self.worker.evaluate = functools.partial(answer_evaluation, counted)
         request = {"op": "call", "name": name, "args": list(args), "kwargs": kwargs, "timeout": limit}
         try:
             reply = self.worker.request(request, limit + _GRACE)
@@ -312,27 +317,58 @@ class Submission:
             raise GradingFailure(f"`{name}` returned a value the grader could not read: {error}") from None
         if not reply.get("ok"):
             raise GradingFailure(self._raised(name, reply.get("error", {}), limit))
+        self._check_library_code(name, reply.get("code"))
         if check_inputs:
             self._check_inputs(name, args, kwargs, reply)
-        calls = dict(reply.get("calls", {})) if isinstance(reply.get("calls"), dict) else {}
-        calls.update({key: entry[1] for key, entry in counted.items()})  # the grader's own count wins
+        # only the grader's own count: the evaluations it answered during this call (the worker sends none)
+        calls = {entry[2]: entry[1] for entry in counted.values()}
         self.last = {"seconds": reply.get("seconds"), "calls": calls}
         value = reply.get("value")
         return value
 
     @staticmethod
     def _count(key, value, counted):
-        """A counted registry function as sent for this call (tagged with its position), else `value`."""
+        """A counted registry function as sent for this call (an opaque token of its own), else `value`."""
         if isinstance(value, RemoteFunction) and value.counted:
-            tagged = copy.copy(value)
-            tagged.__remote_spec__ = dict(value.__remote_spec__, key=str(key))
-            counted[str(key)] = [value, 0]
-            return tagged
+            token = secrets.token_hex(12)
+            counted[token] = [value, 0, str(key)]
+            return Token(token)
         return value
 
     def calls_of(self, position):
-        """How often the last call used the registry function passed at `position` (int or keyword)."""
-        return self.last.get("calls", {}).get(str(position), 0)
+        """How often the last call evaluated the counted function passed at `position` (int or keyword).
+
+        The grader's own count: the evaluations it answered during that call
+        (:mod:`particles.course.worker.registry`), nothing the worker says.
+
+        Raises
+        ------
+        ValueError
+            When no function made with ``remote(..., counted=True)`` was
+            passed at `position` in the last call (or that call failed): a
+            count kept in the worker is never used for grading.
+        """
+        calls = self.last.get("calls", {})
+        if str(position) not in calls:
+            raise ValueError(f"calls_of({position!r}): the last call got no function counted by the grader at "
+                             f"position {position!r}; pass remote(..., counted=True) there")
+        return calls[str(position)]
+
+    def _check_library_code(self, name, records):
+        """Fail when the call could run a forbidden library function's code, however it was loaded (the worker
+        reports fingerprints, the library's are computed here: :mod:`particles.course.worker.codeprints`)."""
+        if not self.forbidden or not isinstance(records, list):
+            return
+        prints = library_prints(tuple(sorted(self.forbidden)))
+        for record in records[:5000]:
+            hit = prints.match(record)
+            if hit:
+                label, forbidden = hit
+                raise GradingFailure(
+                    f"`{name}` runs the library's code, not yours: this is the library's `{label}` (recognised by "
+                    f"its compiled code, however it was loaded), which this exercise forbids: "
+                    f"{self.forbidden[forbidden]}"
+                )
 
     def _check_inputs(self, name, args, kwargs, reply):
         params = self.code.parameters(name) or []
@@ -348,21 +384,6 @@ class Submission:
                     f"`{name}` modified its input `{label}` in place; leave the arrays it is given unchanged "
                     f"and return a new array (e.g. start from `{label}.copy()` or build the result with `+`)"
                 )
-
-
-def _evaluate(counted, frame):
-    """The grader's answer to a worker's ``{"op": "evaluate"}`` frame: the value, and one more call counted."""
-    spec = frame.get("spec") if isinstance(frame.get("spec"), dict) else {}
-    entry = counted.get(str(spec.get("key")))
-    if entry is None:
-        return {"ok": False, "error": "not a function of this call"}
-    entry[1] += 1
-    args = frame.get("args") if isinstance(frame.get("args"), list) else []
-    kwargs = frame.get("kwargs") if isinstance(frame.get("kwargs"), dict) else {}
-    try:
-        return {"ok": True, "value": entry[0](*args, **kwargs)}
-    except Exception as error:  # bad arguments from the student's code: their error, raised in their code
-        return {"ok": False, "error": f"{type(error).__name__}: {error}"}
 
 
 def describe_value(value):

@@ -498,9 +498,161 @@ def euler_step(f, X, t, h):
 """},
         "fails": {"test_euler_step_circle": "load the library past its tripwires"},
     },
+    # -- a forged count of f scores as its honest content: f evaluated twice (issue 23) ----------------------
+    "forges_the_count_by_decrementing_it": {
+        "replace": {"euler_step": """
+def euler_step(f, X, t, h):
+    slope = f(X, t)
+    check = f(X, t)           # evaluated twice...
+    f.calls -= 1              # ...and the count made to say once
+    return X + h * 0.5 * (slope + check)
+"""},
+        "fails": {"test_euler_step_leaves_X_unchanged": "euler_step evaluated f 2 times in one step; Euler's method "
+                                                         "uses exactly one evaluation"},
+        "passes": ["test_euler_step_circle", "test_euler_step_oscillator", "test_euler_step_random", "test_run_circle"],
+    },
+    "forges_the_count_with_setattr_and_its_dict": {
+        "replace": {"euler_step": """
+def euler_step(f, X, t, h):
+    slope = 0.5 * (f(X, t) + f(X, t))
+    f.calls = 1
+    setattr(f, "calls", 1)
+    vars(f)["calls"] = 1
+    for cls in type(f).__mro__[:-1]:
+        try:
+            setattr(cls, "calls", 1)
+        except TypeError:
+            pass
+    return X + h * slope
+"""},
+        "fails": {"test_euler_step_leaves_X_unchanged": "evaluated f 2 times in one step"},
+        "passes": ["test_euler_step_circle", "test_euler_step_oscillator", "test_euler_step_random"],
+    },
+    "forges_the_count_with_a_wrapper_a_thread_and_a_new_f": {
+        "replace": {"euler_step": """
+import sys, threading
+
+def euler_step(f, X, t, h):
+    registry = sys.modules["particles.course.worker.registry"]
+    real = registry.EVALUATE
+    registry.EVALUATE = lambda *args: real(*args)       # the worker's link to the grader, wrapped
+    calls = 0
+    def counted(X, t):                                  # a wrapper with a counter of its own, in a closure
+        nonlocal calls
+        calls += 1
+        return f(X, t)
+    results = []
+    worker = threading.Thread(target=lambda: results.append(counted(X, t)))
+    worker.start()
+    worker.join()
+    calls -= 1
+    slope = 0.5 * (results[0] + counted(X, t))
+    registry.EVALUATE = real
+    f = lambda X, t: slope                              # f replaced: no more evaluations
+    return X + h * f(X, t)
+"""},
+        "fails": {"test_euler_step_leaves_X_unchanged": "evaluated f 2 times in one step"},
+        "passes": ["test_euler_step_circle", "test_euler_step_oscillator", "test_euler_step_random"],
+    },
+    # -- the library's source, read and run: the library's code, not the student's (issue 23) ----------------
+    "execs_the_library_source_read_with_open": {
+        "replace": {"euler_step": """
+import particles
+
+def euler_step(f, X, t, h):
+    path = particles.__path__[0] + "/integrators/steppers.py"
+    namespace = {"__name__": "particles.integrators.steppers", "__package__": "particles.integrators"}
+    exec(open(path).read(), namespace)
+    return namespace["eu" + "ler"](f, X, t, h)
+"""},
+        "fails": {"test_euler_step_circle": "`euler_step` runs the library's code, not yours: this is the library's "
+                                            "`particles.integrators.euler`",
+                  "test_euler_step_random": "this is the library's `particles.integrators.euler`",
+                  "test_run_circle": "this is the library's `particles.integrators.euler`"},
+        "passes": ["test_total_force_three_particles"],
+    },
+    "execs_inspect_getsource_at_load_renamed": {
+        "replace": {"euler_step": """
+import inspect, re
+import particles.integrators.steppers as steppers_module
+
+
+def _my_notes():
+    text = inspect.getsource(steppers_module)
+    text = re.sub(r"\\beuler\\b", "forward_step", text).replace("Explicit (forward) Euler step", "My own step")
+    namespace = {"__name__": "particles.integrators.steppers", "__package__": "particles.integrators"}
+    exec(compile(text, "<my notes>", "exec"), namespace)
+    return namespace
+
+
+NOTES = _my_notes()
+
+
+def euler_step(f, X, t, h):
+    return NOTES["forward_step"](f, X, t, h)
+"""},
+        "fails": {"test_euler_step_circle": "this is the library's `particles.integrators.euler`",
+                  "test_euler_step_oscillator": "runs the library's code, not yours"},
+        "passes": ["test_total_force_three_particles"],
+    },
+    "builds_a_function_from_the_library_code": {
+        "replace": {"euler_step": """
+import importlib.util, types
+import particles.integrators.common as common
+
+
+def euler_step(f, X, t, h):
+    spec = importlib.util.find_spec("particles.integrators.steppers")
+    module_code = compile(spec.loader.get_source(spec.name), "<reading>", "exec")
+    code = next(c for c in module_code.co_consts if getattr(c, "co_name", "") == "eu" + "ler")
+    step = types.FunctionType(code, vars(common))        # the library's globals: check_arguments, evaluate
+    return step(f, X, t, h)
+"""},
+        "fails": {"test_euler_step_circle": "this is the library's `particles.integrators.euler`",
+                  "test_euler_step_leaves_X_unchanged": "this is the library's `particles.integrators.euler`"},
+        "passes": ["test_total_force_three_particles"],
+    },
 }
 
 CORRECT = {
+    # honest code that the recognition of the library's code must leave alone (issue 23)
+    # helpers named like the library's (particles.integrators.common), and a step shaped exactly like the
+    # library's euler: compiled from the notebook's own cell, it is the student's code
+    "own_helpers_named_like_the_library": {
+        "replace": {"euler_step": """
+def check_arguments(X, t, h):            # my helpers, with the library's names
+    return np.asarray(X, dtype=float), float(h)
+
+
+def evaluate(f, X, t):
+    return np.asarray(f(X, t), dtype=float)
+
+
+def euler_step(f, X, t, h):
+    X, h = check_arguments(X, t, h)
+    return X + h * evaluate(f, X, t)
+"""},
+    },
+    "stepper_built_by_exec_of_its_own_source": {
+        "replace": {"euler_step": """
+import types
+
+_SOURCE = "def step(f, X, t, h):\\n    'One Euler step.'\\n    return X + h * f(X, t)\\n"
+
+
+def _build():
+    namespace = {}
+    exec(compile(_SOURCE, "<my stepper>", "exec"), namespace)
+    return types.FunctionType(namespace["step"].__code__, namespace, "euler_step")
+
+
+_STEP = _build()
+
+
+def euler_step(f, X, t, h):
+    return _STEP(f, X, t, h)
+"""},
+    },
     # correct notebooks in the forms that a grader reading cells naively gets wrong (issue 10)
     "time_and_capture_cell_magics": {
         "replace": {

@@ -62,3 +62,13 @@ def test_registry_functions_cross_by_name():
     assert np.array_equal(back(X, 0.0), f(X, 0.0)) and back.calls == 1
     with pytest.raises(ValueError, match="unknown problem"):
         remote("no_such_problem")
+
+
+def test_a_grader_token_becomes_a_function_only_in_a_worker():
+    """A counted function crosses as an opaque token: outside a worker (here, the grader) decoding it is refused."""
+    from particles.course.worker.registry import Token
+
+    frame = encode([Token("0123abcd")])
+    assert b"harmonic" not in frame and b"0123abcd" in frame
+    with pytest.raises(ProtocolError, match="exists only in a worker"):
+        decode(frame)

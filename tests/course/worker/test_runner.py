@@ -55,6 +55,46 @@ def three_evaluations_claiming_one(f, X, t):
         except Exception:
             pass
     return f(X, t) * 0 + len(str(f))
+
+def two_evaluations(f, X, t, forge):
+    # evaluates f twice and forges the count in one way or another (see test_forged_counts_change_nothing)
+    import sys, threading
+    registry = sys.modules["particles.course.worker.registry"]
+    if forge == "wrapper":
+        inner, f = f, lambda X, t: inner(X, t)
+    elif forge == "class_call":
+        original = type(f).__call__
+        type(f).__call__ = lambda self, *a: original(self, *a)
+    elif forge == "evaluate":
+        real = registry.EVALUATE
+        registry.EVALUATE = lambda token, args, kwargs: real(token, args, kwargs)
+    if forge == "threads":
+        out = []
+        threads = [threading.Thread(target=lambda: out.append(f(X, t))) for _ in range(2)]
+        [th.start() for th in threads]
+        [th.join() for th in threads]
+        value = out[0]
+    else:
+        value = f(X, t)
+        value = 0.5 * (value + f(X, t))
+    count = [0]
+    def forget():                # a closure rebinding a counter of its own
+        count[0] -= 1
+    forget()
+    for attempt in {"minus": lambda: setattr(f, "calls", f.calls - 1),
+                    "assign": lambda: setattr(f, "calls", 1),
+                    "dict": lambda: f.__dict__.update(calls=1),
+                    "object": lambda: object.__setattr__(f, "calls", 1),
+                    "class": lambda: setattr(type(f), "calls", 1)}.values():
+        try:
+            attempt()
+        except Exception:
+            pass
+    if forge == "class_call":
+        type(f).__call__ = original
+    if forge == "evaluate":
+        registry.EVALUATE = real
+    return value
 """
 
 
@@ -332,5 +372,27 @@ def test_counted_functions_are_counted_by_the_grader(submission):
     X = np.array([1.0, 0.0])
     value = submission.call("three_evaluations_claiming_one", remote("circle", counted=True), X, 0.0)
     assert submission.calls_of(0) == 4 and value.shape == (2,)
-    submission.call("three_evaluations_claiming_one", remote("circle"), X, 0.0)  # counted in the worker
-    assert submission.calls_of(0) == 2  # the worker's own count: rewritten to 1, then one more call
+    submission.call("three_evaluations_claiming_one", remote("circle"), X, 0.0)  # evaluated in the worker
+    with pytest.raises(ValueError, match="no function counted by the grader at position 0"):
+        submission.calls_of(0)  # the worker's own count is never read
+
+
+@pytest.mark.parametrize("forge", ["plain", "wrapper", "class_call", "evaluate", "threads"])
+def test_forged_counts_change_nothing(submission, forge):
+    """Two evaluations count two, whatever the code does to `f`, its class, its count or the worker's hook."""
+    X = np.array([1.0, 0.0])
+    f = remote("circle", counted=True)
+    value = submission.call("two_evaluations", f, X, 0.0, forge)
+    assert submission.calls_of(0) == 2
+    np.testing.assert_allclose(value, f(X, 0.0))
+
+
+def test_a_counted_function_is_an_opaque_token_in_the_worker(tmp_path):
+    """The worker gets neither the problem's name nor its parameters, so it cannot evaluate f by itself."""
+    code = SubmissionCode.from_cells([("code cell 1", "def show(f):\n    return repr(f) + repr(vars(f))")])
+    with Submission(code, scratch=tmp_path) as sub:
+        text = sub.call("show", remote("harmonic_oscillator", counted=True, omega=2.75))
+        assert "evaluated by the grader" in text
+        assert "harmonic" not in text and "2.75" not in text and "omega" not in text
+        with pytest.raises(ValueError, match="counted by the grader"):
+            sub.calls_of(1)
