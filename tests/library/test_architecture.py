@@ -288,7 +288,7 @@ def test_every_concept_test_exists():
 
 
 # Tests of the course tools at tests/course/ itself: journeys through several packages.
-COURSE_JOURNEYS = {"test_check", "test_cli", "test_provided_cells", "test_student_install"}
+COURSE_JOURNEYS = {"test_check", "test_cli", "test_provided_cells", "test_student_install", "test_term"}
 
 
 def test_course_tests_mirror_the_course_packages():
