@@ -201,8 +201,10 @@ def recorder(library_prefix):
     armed, recorded = [], []
     CodeType = types.CodeType
 
-    def hook(event, args, armed=armed, recorded=recorded, CodeType=CodeType, isinstance=isinstance, len=len,
-             library_prefix=library_prefix):
+    # not named "hook": a recorder is no wall, and what a submission finds of it (gc.get_objects) must not
+    # look like the audit hook it looks for when the Python walls are off (the OS-walls corpus grades that)
+    def record_code(event, args, armed=armed, recorded=recorded, CodeType=CodeType, isinstance=isinstance,
+                    len=len, library_prefix=library_prefix):
         if not armed:
             return
         if event in ("exec", "function.__new__"):
@@ -224,7 +226,7 @@ def recorder(library_prefix):
         recorded.clear()
         return out
 
-    return hook, arm, take
+    return record_code, arm, take
 
 
 class CodeWatch:
