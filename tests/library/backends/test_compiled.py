@@ -29,7 +29,7 @@ from particles.md import fcc_lattice
 from particles.springs import Bending, Springs
 from particles.xpbd import XPBD, distance_pass
 
-from .helpers import _close, needs_numba
+from .helpers import _close, assert_same_bits, needs_numba, on_thread_counts
 
 pytestmark = pytest.mark.skipif("numba" not in backends.available(),
                                 reason="numba is not installed (pip install 'particles[fast]')")
@@ -170,25 +170,17 @@ def test_symplectic_euler_takes_the_compiled_step_and_numpy_does_not():
                          ids=["springs", "bending, damping, wind", "hair with its clamp"])
 def test_the_same_bits_on_one_thread_and_on_two(make, monkeypatch):
     """Blocks of 50 particles: one thread, two threads and the serial kernel give the same bits."""
-    import numba
-
-    from particles.backends import _kernels, compiled
+    from particles.backends import compiled
 
     monkeypatch.setattr(compiled, "STEP_BLOCK", 50)
     system = _shaken(make())
     X = system.state()
-    before = numba.get_num_threads()
-    results = []
-    try:
-        for threads, parallel_min in ((1, 0), (min(2, numba.config.NUMBA_NUM_THREADS), 0), (1, 10**9)):
-            monkeypatch.setattr(_kernels, "PARALLEL_MIN", parallel_min)  # 0: the parallel kernel; 10**9: serial
-            numba.set_num_threads(threads)
-            with backends.using("numba"):
-                results.append(backends.compiled_step(system).symplectic_euler(X, 0.0, H))
-    finally:
-        numba.set_num_threads(before)
-    for other in results[1:]:
-        np.testing.assert_array_equal(other, results[0])
+
+    def run():
+        with backends.using("numba"):
+            return [backends.compiled_step(system).symplectic_euler(X, 0.0, H)]
+
+    assert_same_bits(on_thread_counts(monkeypatch, run))
 
 
 def test_changes_between_steps_are_followed():
@@ -437,29 +429,20 @@ def test_results_do_not_depend_on_the_number_of_threads(monkeypatch):
 
     (For springs the serial form is a one-pass scatter, the parallel one forces per spring then a gather.)
     """
-    import numba
-
-    from particles.backends import _kernels, compiled
+    from particles.backends import compiled
 
     c, X = _cloth_state(32)
     x, box = _liquid()
     rng = np.random.default_rng(7)
     xn, m = rng.normal(size=(200, 3)), rng.uniform(0.5, 2.0, 200)
     chain = np.stack([np.arange(198), np.arange(1, 199), np.arange(2, 200)], axis=1)
-    results = []
-    before = numba.get_num_threads()
-    try:
-        for threads, parallel_min in ((1, 0), (min(2, numba.config.NUMBA_NUM_THREADS), 0), (1, 10**9)):
-            monkeypatch.setattr(_kernels, "PARALLEL_MIN", parallel_min)  # 0: every loop parallel; 10**9: none
-            monkeypatch.setattr(compiled, "SPRING_THREADS", 1)  # springs too: the two-pass form, then one pass
-            numba.set_num_threads(threads)
-            with backends.using("numba"):
-                lj = LennardJones.from_epsilon_sigma(skin=0.3, box=box)
-                xpbd = XPBD.from_system(_cloth_state(32)[0], substeps=2)
-                results.append([c.derivative(X, 0.0), lj(x), np.array(lj.last_virial), xpbd(None, X, 0.0, 0.01),
-                                NBodyGravity()(xn, m=m), Bending(chain, kb=0.5)(xn)])
-    finally:
-        numba.set_num_threads(before)
-    for runs in zip(*results):  # a loop over the quantities: each the same in the three runs
-        for other in runs[1:]:
-            np.testing.assert_array_equal(other, runs[0])
+    monkeypatch.setattr(compiled, "SPRING_THREADS", 1)  # springs too: the two-pass form, then one pass
+
+    def run():
+        with backends.using("numba"):
+            lj = LennardJones.from_epsilon_sigma(skin=0.3, box=box)
+            xpbd = XPBD.from_system(_cloth_state(32)[0], substeps=2)
+            return [c.derivative(X, 0.0), lj(x), np.array(lj.last_virial), xpbd(None, X, 0.0, 0.01),
+                    NBodyGravity()(xn, m=m), Bending(chain, kb=0.5)(xn)]
+
+    assert_same_bits(on_thread_counts(monkeypatch, run))

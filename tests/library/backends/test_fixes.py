@@ -9,7 +9,7 @@ from particles.constraints import ProvotConstraint
 from particles.integrators import symplectic_euler
 from particles.massspring import cloth, string
 
-from .helpers import _close, needs_numba
+from .helpers import _close, assert_same_bits, needs_numba, on_thread_counts
 
 
 def _provot_runs(method, outer, inner="numpy", seconds=0.3):
@@ -181,20 +181,8 @@ def test_the_compiled_step_and_collider_together_agree_with_numpy():
 @needs_numba
 def test_compiled_fixes_have_the_same_bits_on_any_number_of_threads(monkeypatch):
     """Provot's passes and the collider: one thread, two threads and the serial kernels give the same bits."""
-    import numba
+    def run():
+        return ([_provot_runs(m, ("numba",), seconds=0.1)["numba"][0] for m in ("jacobi", "gauss-seidel")]
+                + [_collider_runs(SURFACES[0][1], 3, "backtrack", steps=60, outer=("numba",))["numba"][0]])
 
-    from particles.backends import _kernels
-
-    results = []
-    before = numba.get_num_threads()
-    try:
-        for threads, parallel_min in ((1, 0), (min(2, numba.config.NUMBA_NUM_THREADS), 0), (1, 10**9)):
-            monkeypatch.setattr(_kernels, "PARALLEL_MIN", parallel_min)  # 0: every loop parallel; 10**9: none
-            numba.set_num_threads(threads)
-            results.append([_provot_runs(m, ("numba",), seconds=0.1)["numba"][0] for m in ("jacobi", "gauss-seidel")]
-                           + [_collider_runs(SURFACES[0][1], 3, "backtrack", steps=60, outer=("numba",))["numba"][0]])
-    finally:
-        numba.set_num_threads(before)
-    for runs in zip(*results):  # a loop over the quantities: each the same in the three runs
-        for other in runs[1:]:
-            np.testing.assert_array_equal(other, runs[0])
+    assert_same_bits(on_thread_counts(monkeypatch, run))

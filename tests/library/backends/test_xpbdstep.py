@@ -9,7 +9,7 @@ from particles.forces import Damping, Gravity, Wind
 from particles.massspring import cloth, hair, string
 from particles.xpbd import PBD, XPBD, Attachment, Distance, constraints_from_system
 
-from .helpers import _close, needs_numba
+from .helpers import _close, assert_same_bits, needs_numba, on_thread_counts
 
 
 @needs_numba
@@ -172,21 +172,9 @@ def test_a_new_stiffness_takes_a_new_layout():
 @needs_numba
 def test_the_compiled_substep_has_the_same_bits_on_any_number_of_threads(monkeypatch):
     """Every colour group in parallel on one thread, on two, and no parallel loop at all: the same bits."""
-    import numba
+    def run():
+        X, lams, violation = _run_both(COMPILED_CASES["cloth, bending, air damping"], steps=4, substeps=2,
+                                       iterations=2)[1]
+        return [X] + list(lams) + [np.array(violation)]
 
-    from particles.backends import _kernels
-
-    results = []
-    before = numba.get_num_threads()
-    try:
-        for threads, parallel_min in ((1, 0), (min(2, numba.config.NUMBA_NUM_THREADS), 0), (1, 10**9)):
-            monkeypatch.setattr(_kernels, "PARALLEL_MIN", parallel_min)  # 0: every loop parallel; 10**9: none
-            numba.set_num_threads(threads)
-            X, lams, violation = _run_both(COMPILED_CASES["cloth, bending, air damping"], steps=4, substeps=2,
-                                           iterations=2)[1]
-            results.append([X] + list(lams) + [np.array(violation)])
-    finally:
-        numba.set_num_threads(before)
-    for runs in zip(*results):  # a loop over the quantities: each the same in the three runs
-        for other in runs[1:]:
-            np.testing.assert_array_equal(other, runs[0])
+    assert_same_bits(on_thread_counts(monkeypatch, run))
