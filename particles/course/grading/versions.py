@@ -21,6 +21,8 @@ import ast
 import hashlib
 from pathlib import Path
 
+from ..walls.integrity import library_checksum
+
 __all__ = ["tests_version", "tests_files", "library_digest"]
 
 _DIGITS = 12
@@ -87,6 +89,9 @@ def _local_imports(path, folder):
 def library_digest(package=None):
     """``<version>+<digest>`` of the reference library: ``particles.__version__`` and its source files.
 
+    The digest is taken over :func:`~particles.course.walls.integrity.library_checksum` (the same
+    walk the driver's integrity check makes), bytecode left out.
+
     Parameters
     ----------
     package : path, optional
@@ -95,11 +100,9 @@ def library_digest(package=None):
     """
     package = Path(package) if package is not None else Path(__file__).resolve().parents[2]
     digest = hashlib.sha256()
-    for path in sorted(package.rglob("*")):
-        if "__pycache__" in path.parts or path.suffix == ".pyc" or not path.is_file():
-            continue
-        digest.update(str(path.relative_to(package)).encode() + b"\0")
-        digest.update(hashlib.sha256(path.read_bytes()).digest())
+    for name, value in sorted(library_checksum(package).items()):
+        if "__pycache__" not in Path(name).parts and not name.endswith(".pyc"):
+            digest.update(f"{name}\0{value}\n".encode())
     return f"{_version(package)}+{digest.hexdigest()[:_DIGITS]}"
 
 
