@@ -30,7 +30,7 @@ import json
 import re
 from pathlib import Path
 
-__all__ = ["ANSWER_PROMPT", "SLOT_KEY", "DEFAULT_POINTS", "slot_of", "answer_slots", "questions_of",
+__all__ = ["ANSWER_PROMPT", "cell_source", "SLOT_KEY", "DEFAULT_POINTS", "slot_of", "answer_slots", "questions_of",
            "question_points", "count_answers", "answers_of", "answer_cells", "model_answers", "is_blank",
            "solution_parts", "answers_note"]
 
@@ -44,7 +44,8 @@ DEFAULT_POINTS = 1.0
 """What a written question is worth when its header declares nothing."""
 
 
-def _source(cell):
+def cell_source(cell):
+    """A cell's source as one string (a list of lines joined; anything else that is not text: "")."""
     source = cell.get("source", "") if isinstance(cell, dict) else ""
     if isinstance(source, list):
         return "".join(s for s in source if isinstance(s, str))
@@ -95,7 +96,7 @@ def questions_of(released):
             out[k] = text.strip()
             above = []
         elif cell.get("cell_type") == "markdown":
-            above.append(_source(cell))
+            above.append(cell_source(cell))
     return out
 
 
@@ -176,7 +177,7 @@ def answers_of(submission, released):
     The cells of each answer are those of :func:`answer_cells`.
     """
     cells = submission.get("cells") if isinstance(submission.get("cells"), list) else []
-    texts = {k: "\n\n".join(_source(cells[i]) for i in where)
+    texts = {k: "\n\n".join(cell_source(cells[i]) for i in where)
              for k, where in answer_cells(submission, released).items()}
     return {k: "" if is_blank(text) else text.replace(ANSWER_PROMPT, "").strip() for k, text in texts.items()}
 
@@ -212,7 +213,7 @@ def solution_parts(source):
 def _master_blocks(notebook):
     """The solution blocks of a master's markdown cells, as texts (a master checked as a submission)."""
     return [text for cell in notebook.get("cells", []) if cell.get("cell_type") == "markdown"
-            for part, text in solution_parts(_source(cell)) if part == "answer"]
+            for part, text in solution_parts(cell_source(cell)) if part == "answer"]
 
 
 def answers_note(written, where=""):

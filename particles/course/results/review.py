@@ -31,14 +31,14 @@ import binascii
 import csv
 import html
 import io
-import json
 import os
 import tempfile
 from pathlib import Path
 
 from ..grading.discovery import find_submissions, released_exercise
+from ..grading.intake import NotebookRejected, read_notebook
 from ..paths import exercise_tests, project_root
-from ..release.answers import (answer_cells, answers_of, model_answers, question_points, questions_of,
+from ..release.answers import (answer_cells, answers_of, cell_source, model_answers, question_points, questions_of,
                                is_blank)
 from .markup import markdown_html
 from .rubric import COLUMNS
@@ -88,11 +88,6 @@ def _page(title, body):
 
 def _fmt(x):
     return f"{x:g}"
-
-
-def _source(cell):
-    source = cell.get("source", "")
-    return "".join(s for s in source if isinstance(s, str)) if isinstance(source, list) else str(source or "")
 
 
 def _images(cell):
@@ -146,7 +141,7 @@ def answer_figures(notebook, released):
         start = previous_end + 1
         for i in range(first - 1, start - 1, -1):  # the last heading above the answer
             cell = cells[i] if isinstance(cells[i], dict) else {}
-            if cell.get("cell_type") == "markdown" and _source(cell).lstrip().startswith("#"):
+            if cell.get("cell_type") == "markdown" and cell_source(cell).lstrip().startswith("#"):
                 start = i + 1
                 break
         end = next((i for i in range(last + 1, len(cells)) if isinstance(cells[i], dict)
@@ -157,19 +152,14 @@ def answer_figures(notebook, released):
     return out
 
 
-def _read_notebook(path):
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError):
-        return None
-    return data if isinstance(data, dict) else None
-
-
 def _answers(unit, released, slots):
-    """``{k: (text, figures)}`` of one notebook, and a note when it cannot be read."""
-    notebook = _read_notebook(unit.notebook)
-    if notebook is None:
-        return {k: ("", []) for k in slots}, "the notebook cannot be read"
+    """``{k: (text, figures)}`` of one notebook, and why when it is not read (as ``particles grade`` says it)."""
+    try:
+        if unit.rejected:
+            raise NotebookRejected(unit.rejected)
+        notebook = read_notebook(unit.notebook)  # the grader's checks and limits: no 100 MB page
+    except NotebookRejected as error:
+        return {k: ("", []) for k in slots}, str(error)
     texts = answers_of(notebook, released)
     figures = answer_figures(notebook, released)
     if not any(answer_cells(notebook, released).values()) and model_answers(notebook):  # a master
@@ -287,7 +277,10 @@ def write_review(paths, out, *, root=None, exercise=None):
             points = question_points(released)
         except ValueError as error:
             raise ValueError(f"solutions/{name}.ipynb: {error}") from None
-        master = _read_notebook(root / "solutions" / f"{name}.ipynb") or {}
+        try:
+            master = read_notebook(root / "solutions" / f"{name}.ipynb")
+        except NotebookRejected:
+            master = {}
         models = model_answers(master)
         mine = sorted((u for u in units if u.exercise == name), key=lambda u: u.student)
         answers = {}

@@ -175,3 +175,20 @@ def test_the_review_command(reviewed, tmp_path, capsys):
     assert "unknown exercise '9_x'" in capsys.readouterr().err
     assert main(["review", str(tmp_path / "nothing"), "--out", str(tmp_path / "y"), "--root", str(ROOT)]) == 1
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_a_notebook_the_grader_refuses_is_shown_blank_with_the_graders_reason(tmp_path):
+    """Review reads notebooks with the grader's checks: a notebook that is not JSON, or one whose nbformat
+    is 3, is listed with the one-line reason `particles grade` gives, and its answers are blank."""
+    subs = tmp_path / "subs"
+    for student, text in {"ada": json.dumps(_submission({1: "Order one."})), "bob": '{"cells": [',
+                          "cy": json.dumps({"nbformat": 3, "nbformat_minor": 0, "worksheets": []})}.items():
+        (subs / student).mkdir(parents=True)
+        (subs / student / f"{EXERCISE}.ipynb").write_text(text)
+    summary = write_review([subs], tmp_path / "review", root=ROOT)
+    problems = "\n".join(summary["problems"])
+    assert "bob" in problems and "not valid JSON" in problems and "shown blank" in problems
+    assert "cy" in problems and "nbformat 3" in problems
+    assert "ada" not in problems
+    page = (tmp_path / "review" / EXERCISE / "question-1.html").read_text()
+    assert "Order one." in page
