@@ -161,14 +161,27 @@ def pytest_generate_tests(metafunc):
                              scope="module")
 
 
+@pytest.hookimpl(trylast=True)
 def pytest_collection_modifyitems(config, items):
-    if not config.getoption("--public-only", default=False):
-        return
-    keep = [item for item in items if item.get_closest_marker("hidden") is None]
-    dropped = [item for item in items if item.get_closest_marker("hidden") is not None]
-    if dropped:
-        config.hook.pytest_deselected(items=dropped)
-        items[:] = keep
+    """Drop the hidden tests with ``--public-only``; in a batch, run each notebook's tests together.
+
+    Pytest groups the tests of a module-scoped parameter, but a test with parameters of its own
+    (``test_x[__job0__-a]``, ``test_x[__job0__-b]``) breaks the groups: the notebooks then take
+    turns, and each turn tears its worker down and starts (and loads the notebook in) a new one.
+    Runs after pytest's own ordering (``trylast``) and keeps it within each notebook (a stable sort).
+    """
+    if config.getoption("--public-only", default=False):
+        keep = [item for item in items if item.get_closest_marker("hidden") is None]
+        dropped = [item for item in items if item.get_closest_marker("hidden") is not None]
+        if dropped:
+            config.hook.pytest_deselected(items=dropped)
+            items[:] = keep
+    jobs = {id(job): k for k, job in enumerate(config._particles_jobs)}
+    if len(jobs) > 1:
+        modules = {}
+        for item in items:
+            modules.setdefault(item.path, len(modules))
+        items.sort(key=lambda item: (modules[item.path], jobs.get(id(_job_of(item)), -1)))
 
 
 def _exercise_of(module):
@@ -239,7 +252,8 @@ def _particles_submission(request, _particles_job):
     blame([t for t in result.tests if t.test in _module_tests(request)], submission.code,
           written=stub_functions(root / "exercises" / f"{exercise}.ipynb"))
     submission.close()
-    result.restarts = submission.restarts
+    # a notebook whose tests did not run together had its fixture set up again: count every worker
+    result.restarts = submission.restarts + (result.restarts if result.seconds is not None else 0)
     result.load_errors = submission.code.student_load_errors(submission.load_errors)
     result.skipped = [{"label": s.label, "line": s.line, "text": s.text, "reason": s.reason}
                       for s in submission.code.skipped]

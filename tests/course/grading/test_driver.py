@@ -69,6 +69,25 @@ def test_honest_grade_is_the_same_alone_and_beside_hostile_ones(tmp_path):
     assert together[1]["isolation"]["audit_hook"] is True and together[1]["sandbox"]
 
 
+def test_each_notebook_of_a_batch_keeps_one_worker_through_tests_with_parameters(tmp_path):
+    """A batch runs each notebook's tests together: one worker per notebook, even where tests have parameters.
+
+    ``test_provot_pass_one_spring`` of exercise 03 has parameters of its own; pytest's ordering alone
+    made the notebooks take turns there, and every turn started a new worker and loaded the notebook
+    again.
+    """
+    master = ROOT / "solutions" / "03_provot.ipynb"
+    units = []
+    for name in ("ada", "bo"):
+        (tmp_path / f"{name}.ipynb").write_bytes(master.read_bytes())
+        units.append(Unit(name, "03_provot", tmp_path / f"{name}.ipynb"))
+    records = grade_batch(units, ROOT, seeds=[5, 5])
+    assert not [note for r in records for note in r["notes"] if "restarted" in note]
+    assert all(r.complete and r.score == r.max_score for r in records), [r.score for r in records]
+    parametrized = [t["test"] for t in records[1]["tests"] if t["test"].startswith("test_provot_pass_one_spring[")]
+    assert len(parametrized) == 4, parametrized
+
+
 def test_records_are_written_as_they_are_made_and_resumed(tmp_path):
     """Each notebook's record is on disk after its batch; --resume keeps unchanged ones and grades the rest."""
     subs, out = tmp_path / "subs", tmp_path / "out"
