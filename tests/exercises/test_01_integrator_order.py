@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from particles.course.grading.expect import LN10, expect_array, expect_float, expect_order
+from particles.course.grading.memo import memoized
 from particles.course.worker.registry import remote
 from particles.course.worker.runner import GradingFailure, describe_value
 from particles.integrators import euler, midpoint, rk4, trapezoid
@@ -143,7 +144,7 @@ def _check_step(student, method, f, X, t, h, where, check_inputs=False, count=Fa
             f"{name}(f, X of shape {X.shape}, t={t:.4g}, h={h:.4g}) on {where}")
     got = student.call(name, f, X, t, h, check_inputs=check_inputs)
     try:
-        expect_array(got, reference(f, X, t, h), call, hints=_wrong_steps(method, f, X, t, h),
+        expect_array(got, reference(f, X, t, h), call, hints=lambda: _wrong_steps(method, f, X, t, h),
                      show_values=not hidden)
     except GradingFailure as failure:
         message = str(failure)
@@ -171,9 +172,18 @@ def _random_problem(rng, name):
             "x0": rng.uniform(-2.0, 2.0), "v0": rng.uniform(-2.0, 2.0), "t1": rng.uniform(2.0, 6.0)}
 
 
-def _reference_order(problem, method, n_steps):
+@memoized
+def _reference_errors(name, params, method, n_steps):
+    """The reference stepper's global errors on problem `name` with `params`, one per step count (an array)."""
+    problem = get_problem(name, **params)
+    return np.array([global_error(problem, method, int(n)) for n in n_steps])
+
+
+def _reference_order(name, params, method, n_steps):
+    """The slope the reference library measures on problem `name` with `params` and these step counts."""
+    problem = get_problem(name, **params)
     h = (problem.t1 - problem.t0) / np.asarray(n_steps, dtype=float)
-    return fit_order(h, [global_error(problem, method, int(n)) for n in n_steps])
+    return fit_order(h, _reference_errors(name, params, method, list(n_steps)))
 
 
 def _clean_problem(rng, name, method):
@@ -185,7 +195,7 @@ def _clean_problem(rng, name, method):
     """
     for _ in range(50):
         params = _random_problem(rng, name)
-        order = _reference_order(get_problem(name, **params), method, N_STEPS[method])
+        order = _reference_order(name, params, method, N_STEPS[method])
         if abs(order - STEPS[method][2]) < 0.05:
             return params
     raise RuntimeError(f"no clean {name} problem for {method} in 50 draws")
@@ -216,7 +226,8 @@ def _diagnosis(student, method, only_step=False):
     try:
         got = student.call(name, f, X, 0.35, 0.05, check_inputs=True)
         try:
-            expect_array(got, reference(f, X, 0.35, 0.05), name, hints=_wrong_steps(method, f, X, 0.35, 0.05))
+            expect_array(got, reference(f, X, 0.35, 0.05), name,
+                         hints=lambda: _wrong_steps(method, f, X, 0.35, 0.05))
         except GradingFailure as failure:
             clause = _clause(failure) or _weights_diagnosis(got, method, f, X, 0.35, 0.05)[2:]
             raise GradingFailure(f"; one step of your {name} does not match the reference"
@@ -235,9 +246,9 @@ def _diagnosis(student, method, only_step=False):
     try:
         got = student.call("convergence_errors", method, field, problem.X0, problem.t0, problem.t1, exact, [10, 20])
         errors = np.asarray(got[1], dtype=float) if isinstance(got, (tuple, list)) and len(got) == 2 else got
-        expect_array(errors, [global_error(problem, method, 10), global_error(problem, method, 20)],
+        expect_array(errors, _reference_errors("forced_oscillator", driven, method, [10, 20]),
                      "convergence_errors", rtol=1e-6, atol=1e-13,
-                     hints=_error_hints(method, field, exact, problem.X0, problem.t0, problem.t1, [10, 20]))
+                     hints=lambda: _error_hints(method, field, exact, problem.X0, problem.t0, problem.t1, [10, 20]))
     except (GradingFailure, TypeError, ValueError) as failure:
         clause = _clause(failure)
         return ("; your steps are right, but your convergence_errors does not give the reference errors"
@@ -297,7 +308,7 @@ def _judge_order(student, method, name, params, n_steps=None, hidden=False, feed
         raise GradingFailure(f"{call} returned {describe_value(got)}, expected a number")
     got = float(got)
     nominal = STEPS[method][2]
-    reference = _reference_order(problem, method, n_steps)
+    reference = _reference_order(name, params, method, n_steps)
     if asymptotic:
         try:
             expect_order(got, nominal, f"your {method} step ({call})", tolerance=ORDER_TOLERANCE)
@@ -351,11 +362,11 @@ def _check_errors(student, method, name, params, n_steps, check_inputs=False, hi
                  f"the step sizes h of {call}", rtol=1e-12, show_values=not hidden,
                  hints={"the numbers of steps N instead of the step sizes h = (t1 - t0) / N": n,
                         "t1 / N: the step sizes without t0 (h = (t1 - t0) / N)": t1 / n})
-    expected = np.array([global_error(problem, method, int(k)) for k in n_steps])
+    expected = _reference_errors(name, params, method, list(n_steps))
     errors = np.asarray(got[1]) if isinstance(got[1], list) else got[1]
     try:
         expect_array(errors, expected, f"the errors of {call}", rtol=1e-6, atol=1e-13,
-                     hints=_error_hints(method, f, exact, X0, t0, t1, n_steps), show_values=not hidden)
+                     hints=lambda: _error_hints(method, f, exact, X0, t0, t1, n_steps), show_values=not hidden)
     except GradingFailure as failure:
         extra = _diagnosis(student, method, only_step=True)
         if "; your result matches" in str(failure) and "matches the reference on a single step" in extra:
@@ -423,7 +434,8 @@ def _slope_of(got, candidates):
 def _check_slope(student, h, e, call, check_inputs=False, hidden=False):
     """observed_order(h, e) of the student against the reference least-squares slope, with typical wrong slopes."""
     got = student.call("observed_order", h, e, check_inputs=check_inputs)
-    expect_float(got, fit_order(h, e), call, rtol=1e-8, atol=1e-10, hints=_slope_hints(h, e), show_values=not hidden)
+    expect_float(got, fit_order(h, e), call, rtol=1e-8, atol=1e-10, hints=lambda: _slope_hints(h, e),
+                 show_values=not hidden)
 
 
 # -- figures for the feedback ------------------------------------------------------------------
@@ -440,7 +452,7 @@ def _figure_errors(feedback, student, method, name, params, n_steps, hidden=Fals
     f, exact = remote(name, **params), remote(name, attr="exact", **params)
     problem = f.problem
     h = (problem.t1 - problem.t0) / np.asarray(n_steps, dtype=float)
-    reference = np.array([global_error(problem, method, int(k)) for k in n_steps])
+    reference = _reference_errors(name, params, method, list(n_steps))
     try:
         got = student.call("convergence_errors", method, f, problem.X0, problem.t0, problem.t1, exact, list(n_steps))
         yours = np.asarray(got[1], dtype=float) if isinstance(got, (tuple, list)) and len(got) == 2 else None
@@ -598,7 +610,7 @@ def _coarse_problem(rng, method):
         params = _random_problem(rng, name)
         n0 = int(rng.integers(3, 7))
         n_steps = [n0, 2 * n0, 4 * n0]
-        order = _reference_order(get_problem(name, **params), method, n_steps)
+        order = _reference_order(name, params, method, n_steps)
         if 0.1 <= abs(order - STEPS[method][2]) <= 1.0:
             return name, params, n_steps
     raise RuntimeError(f"no coarse problem for {method} in 50 draws")

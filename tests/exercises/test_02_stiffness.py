@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from particles.course.grading.expect import expect_array
+from particles.course.grading.memo import memoized
 from particles.course.worker.runner import GradingFailure, describe_value
 from particles.integrators import INTEGRATORS, euler, implicit_euler, symplectic_euler
 from particles.massspring import string
@@ -84,18 +85,26 @@ def _check_limit(got, h_max, unstable, omega, call, test, symbol="omega h", advi
                              f"below that{scale or advice}")
 
 
+@memoized
+def _spring_blows_up(method, k, m, h, steps):
+    """The library's blow-up test of one spring (x = 1 m, v = 0): True when h blows up within `steps` steps."""
+    return stability.blows_up(method, k, m, h, steps=steps)
+
+
 def _spring_test(method, k, m, steps):
-    """The library's blow-up test of one spring (x = 1 m, v = 0): h -> True when h blows up within `steps` steps."""
-    return lambda h: stability.blows_up(method, k, m, h, steps=steps)
+    """The library's blow-up test of one spring as a function: h -> True when h blows up within `steps` steps."""
+    return lambda h: _spring_blows_up(method, k, m, h, steps)
 
 
+@memoized
 def _spring_limit(method, k, m, steps):
     """The largest step that passes the library's blow-up test of `steps` steps, to 1e-4."""
     return stability.max_stable_step(method, k, m, steps=steps, rtol=1e-4)
 
 
-def _chain_test(method, n, k, m, steps):
-    """The notebook's blow-up test of a chain, run with the library's stepper: h -> True when h blows up.
+@memoized
+def _chain_blows_up(method, n, k, m, steps, h):
+    """The notebook's blow-up test of a chain, run with the library's stepper: True when h blows up.
 
     n masses m between two walls, springs k, from x_j = (-1)^j, v = 0; a blow-up is an amplitude
     sqrt(sum x^2 + sum (v / omega)^2), omega = sqrt(k / m), above 1000 times its start within `steps`
@@ -103,8 +112,8 @@ def _chain_test(method, n, k, m, steps):
     and lets steps up to 1% larger pass: a step just past the notebook's limit can pass it.
     """
     step, w2 = INTEGRATORS[method], k / m
-    X0 = np.zeros((n, 2, 1))
-    X0[:, 0, 0] = (-1.0) ** np.arange(n)
+    X = np.zeros((n, 2, 1))
+    X[:, 0, 0] = (-1.0) ** np.arange(n)
 
     def f(X, t):
         a = w2 * np.diff(np.concatenate([[0.0], X[:, 0, 0], [0.0]]), 2)
@@ -113,20 +122,24 @@ def _chain_test(method, n, k, m, steps):
     def amplitude(X):
         return np.sqrt(np.sum(X[:, 0] ** 2) + np.sum(X[:, 1] ** 2) / w2)
 
-    def unstable(h):
-        X, limit = X0, 1e3 * amplitude(X0)
-        with np.errstate(over="ignore", invalid="ignore"):
-            for s in range(steps):  # a loop over time steps
-                X = step(f, X, s * h, h)
-                if not amplitude(X) <= limit:
-                    return True
-        return False
-
-    return unstable
+    limit = 1e3 * amplitude(X)
+    with np.errstate(over="ignore", invalid="ignore"):
+        for s in range(steps):  # a loop over time steps
+            X = step(f, X, s * h, h)
+            if not amplitude(X) <= limit:
+                return True
+    return False
 
 
-def _chain_limit(unstable, theory, rtol=1e-4):
-    """The largest step that passes `unstable`, by geometric bisection from half to twice `theory`, to `rtol`."""
+def _chain_test(method, n, k, m, steps):
+    """The chain's blow-up test (:func:`_chain_blows_up`) as a function: h -> True when h blows up."""
+    return lambda h: _chain_blows_up(method, n, k, m, steps, h)
+
+
+@memoized
+def _chain_limit(method, n, k, m, steps, rtol=1e-4):
+    """The largest step the chain's blow-up test lets pass, by geometric bisection around its theory, to `rtol`."""
+    unstable, theory = _chain_test(method, n, k, m, steps), _chain_reference(method, n, k, m)
     lo, hi = 0.5 * theory, 2.0 * theory
     if unstable(lo) or not unstable(hi):  # a grader bug, not the student's
         raise RuntimeError("the chain's limit is not within half to twice its theory")
@@ -171,7 +184,7 @@ def test_blows_up_random(student, rng):
         omega = np.sqrt(k / m)
         for factor in (rng.uniform(0.5, 0.9), rng.uniform(1.1, 1.5)):
             h = factor * STABLE[method] / omega
-            expected = stability.blows_up(method, k, m, h, steps=200)
+            expected = _spring_blows_up(method, k, m, h, 200)
             got = _blows_up(student, method, k, m, h, 200, hidden=True)
             if got != expected:
                 raise GradingFailure(f"blows_up({method!r}, k, m, h) on a random spring at omega h = {omega * h:.3g} "
@@ -246,6 +259,7 @@ def test_max_stable_step_is_measured(student, rng):
 # -- chain_max_stable_step ---------------------------------------------------------------------
 
 
+@memoized
 def _chain_reference(method, n, k, m):
     """(omega h)_max / omega_max, with omega_max from the library's taut string pinned at both ends."""
     h_symplectic = string(n + 2, pin="both", k=k, mass=m, gravity=0.0).max_stable_step()   # 2 / omega_max
@@ -256,7 +270,7 @@ def _check_chain(got, method, n, k, m, steps, call, test, advice=""):
     """The student's chain limit against the notebook's chain test of `steps` steps (units of omega_max h)."""
     theory = _chain_reference(method, n, k, m)
     unstable = _chain_test(method, n, k, m, steps)
-    _check_limit(got, _chain_limit(unstable, theory), unstable, STABLE[method] / theory, call, test,
+    _check_limit(got, _chain_limit(method, n, k, m, steps), unstable, STABLE[method] / theory, call, test,
                  symbol="omega_max h", advice=advice, theory=theory)
 
 

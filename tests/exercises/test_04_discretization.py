@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from particles.course.grading.expect import LN10, expect_array, expect_float
+from particles.course.grading.memo import memoized
 from particles.course.worker.runner import GradingFailure, describe_value
 from particles.massspring import cloth, cloth_masses, cloth_springs, cloth_stiffness
 from particles.studies.discretization import static_sag
@@ -110,11 +111,13 @@ def _check_masses(student, nx, ny, W, H, rho, hidden=False):
             f"particle_masses(nx={nx}, ny={ny}, width={W:.4g}, height={H:.4g}, rho={rho:.4g})")
     got = student.call("particle_masses", nx, ny, W, H, rho)
     expected = cloth_masses(nx, ny, W, H, rho)
-    hints = dict(_mass_hints(nx, ny, W, H, rho), **{_SAME_MASS: lambda m: m.size > 1 and np.ptp(m) == 0})
+    def hints():
+        return dict(_mass_hints(nx, ny, W, H, rho), **{_SAME_MASS: lambda m: m.size > 1 and np.ptp(m) == 0})
+
     if isinstance(got, np.ndarray) and got.shape == expected.shape and got.dtype.kind == "f" \
             and np.all(np.isfinite(got)) and not np.isclose(got.sum(), rho * W * H, rtol=1e-9):
         hint = ""
-        for label, wrong in hints.items():
+        for label, wrong in hints().items():
             if (wrong(got) if callable(wrong) else np.allclose(got, wrong, rtol=1e-9)):
                 hint = f"; {label}" if label.startswith("your ") else f"; your result matches {label}"
                 break
@@ -202,7 +205,7 @@ def _stiffness_hints(nx, ny, W, H, Y, kind):
 def _check_kind(got, call, nx, ny, W, H, Y, kind, hidden=False):
     expected = cloth_stiffness(nx, ny, W, H, Y)[kind]
     expect_array(got[kind], expected, f"the '{kind}' stiffnesses of {call}", rtol=1e-9,
-                 hints=_stiffness_hints(nx, ny, W, H, Y, kind), show_values=not hidden)
+                 hints=lambda: _stiffness_hints(nx, ny, W, H, Y, kind), show_values=not hidden)
 
 
 @pytest.mark.points(1)
@@ -241,12 +244,14 @@ def test_stiffness_random(student, rng):
 # -- cloth_sag ---------------------------------------------------------------------------------
 
 
+@memoized
 def _reference_sag(n, W, H, rho, Y):
     c = cloth(n, n, W, H, pins="top edge", scaling="physical", areal_density=rho, stretch_modulus=Y["structural"],
               shear_modulus=Y["shear"], flexion_modulus=Y["flexion"])
     return static_sag(c)
 
 
+@memoized
 def _sag_variants(n, W, H, rho, Y):
     """Typical wrong sags of the library's relaxed n x n cloth: label -> value (m)."""
     c = cloth(n, n, W, H, pins="top edge", scaling="physical", areal_density=rho, stretch_modulus=Y["structural"],
@@ -299,17 +304,35 @@ def _parts_diagnosis(student, n, W, H, rho, Y):
     return ""
 
 
-def _check_sag_converges(student, resolutions, W, H, rho, Y, hidden=False):
+def _student_sags(student, resolutions, W, H, rho, Y):
+    """What the student's cloth_sag gives at `resolutions`, up to its first failure: a list of results.
+
+    Each is what the call returned, or the GradingFailure it raised (the last one then): the figure and
+    the check read the same answers, and the student's relaxations run once.
+    """
+    answers = []
+    for n in resolutions:
+        try:
+            answers.append(student.call("cloth_sag", n, n, W, H, rho, dict(Y), timeout=SAG_TIMEOUT))
+        except GradingFailure as failure:
+            answers.append(failure)
+            break
+    return answers
+
+
+def _check_sag_converges(student, answers, resolutions, W, H, rho, Y, hidden=False):
     """The student's sags at `resolutions` (n x n) agree with each other and with the library's converged sag.
 
-    A hidden test (`hidden`) keeps its random sheet and fabric out of the message.
+    `answers` are the student's, from :func:`_student_sags`. A hidden test (`hidden`) keeps its random sheet
+    and fabric out of the message.
     """
     reference = _reference_sag(max(resolutions), W, H, rho, Y)
     sags = []
-    for n in resolutions:
+    for n, got in zip(resolutions, answers):
         call = (f"cloth_sag(nx={n}, ny={n}, width, height, rho, Y) of a random sheet and fabric" if hidden else
                 f"cloth_sag(nx={n}, ny={n}, width={W:.3g}, height={H:.3g}, {_fabric_text(rho, Y)})")
-        got = student.call("cloth_sag", n, n, W, H, rho, dict(Y), timeout=SAG_TIMEOUT)
+        if isinstance(got, GradingFailure):
+            raise got
         got = _number(got, call)
         sags.append(got)
         if not abs(got - reference) <= SAG_TOLERANCE * reference:
@@ -328,18 +351,17 @@ def _check_sag_converges(student, resolutions, W, H, rho, Y, hidden=False):
                              f"{100 * SAG_TOLERANCE:g}%")
 
 
-def _figure_sag(feedback, student, resolutions, W, H, rho, Y, hidden=False):
+def _figure_sag(feedback, answers, resolutions, W, H, rho, Y, hidden=False):
     """Attach the student's sag against the resolution beside the library's, before the test judges it.
 
-    A hidden test plots sags relative to the library's at the finest resolution, so that its random sheet and
-    fabric do not show. The student's cloth_sag is called until its first failure (the test reports it).
+    `answers` are the student's, from :func:`_student_sags` (up to its first failure, which the test
+    reports). A hidden test plots sags relative to the library's at the finest resolution, so that its random
+    sheet and fabric do not show.
     """
     reference = np.array([_reference_sag(n, W, H, rho, Y) for n in resolutions])
     yours = []
-    for n in resolutions:
-        try:
-            value = student.call("cloth_sag", n, n, W, H, rho, dict(Y), timeout=SAG_TIMEOUT)
-        except GradingFailure:
+    for value in answers:
+        if isinstance(value, GradingFailure):
             break
         if isinstance(value, np.ndarray) and value.shape == ():
             value = value[()]
@@ -359,8 +381,9 @@ def _figure_sag(feedback, student, resolutions, W, H, rho, Y, hidden=False):
 @pytest.mark.points(2)
 def test_sag_converges(student, feedback):
     """cloth_sag of the notebook's 1 m fabric is the same sag at 8 and 16 particles per side."""
-    _figure_sag(feedback, student, [8, 16], 1.0, 1.0, RHO, FABRIC)
-    _check_sag_converges(student, [8, 16], 1.0, 1.0, RHO, FABRIC)
+    answers = _student_sags(student, [8, 16], 1.0, 1.0, RHO, FABRIC)
+    _figure_sag(feedback, answers, [8, 16], 1.0, 1.0, RHO, FABRIC)
+    _check_sag_converges(student, answers, [8, 16], 1.0, 1.0, RHO, FABRIC)
 
 
 @pytest.mark.points(3)
@@ -369,13 +392,15 @@ def test_sag_converges_random_fabric(student, rng, feedback):
     """cloth_sag of a random sheet and fabric is the same sag at 8, 12 and 16 particles per side."""
     W, H = float(rng.uniform(0.5, 1.5)), float(rng.uniform(0.5, 1.5))
     rho, Y = _random_fabric(rng)
-    _figure_sag(feedback, student, [8, 12, 16], W, H, rho, Y, hidden=True)
-    _check_sag_converges(student, [8, 12, 16], W, H, rho, Y, hidden=True)
+    answers = _student_sags(student, [8, 12, 16], W, H, rho, Y)
+    _figure_sag(feedback, answers, [8, 12, 16], W, H, rho, Y, hidden=True)
+    _check_sag_converges(student, answers, [8, 12, 16], W, H, rho, Y, hidden=True)
 
 
 # -- stable_step and fit_exponent --------------------------------------------------------------
 
 
+@memoized
 def _reference_step(n, W, H, rho, Y):
     c = cloth(n, n, W, H, pins="top edge", scaling="physical", areal_density=rho, stretch_modulus=Y["structural"],
               shear_modulus=Y["shear"], flexion_modulus=Y["flexion"])

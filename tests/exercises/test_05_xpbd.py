@@ -29,6 +29,7 @@ import numpy as np
 import pytest
 
 from particles.course.grading.expect import expect_array, expect_float
+from particles.course.grading.memo import memoized
 from particles.course.worker.runner import GradingFailure, describe_value
 from particles.forces import Gravity
 from particles.massspring import cloth
@@ -57,6 +58,7 @@ def _groups(colour):
     return [np.flatnonzero(colour == c) for c in range(int(colour.max()) + 1) if np.any(colour == c)]
 
 
+@memoized
 def _reference_pass(x, w, ij, L0, at, lam, colour):
     """The two accepted passes: Gauss-Seidel over the colours, Jacobi with averaging (library)."""
     return {"gauss-seidel": distance_pass(x, w, ij, L0, at, lam, np.asarray(colour)),
@@ -101,6 +103,7 @@ def _pass_hints(x, w, ij, L0, at, lam, colour, part):
     return hints
 
 
+@memoized
 def _reference_step(x, v, w, ij, L0, compliance, colour, g, h, substeps, iterations, method):
     free = np.asarray(w) > 0
     m = np.where(free, 1.0 / np.where(free, w, 1.0), 1.0)
@@ -172,10 +175,10 @@ def _check_pass(student, x, w, ij, L0, at, lam, colour, call, show_values):
                 ("x_new", "lam_new"))
     refs = _reference_pass(x, w, ij, L0, at, lam, colour)
     _matches_one(got[0], [refs["gauss-seidel"][0], refs["jacobi"][0]], f"x_new of {call}",
-                 _pass_hints(x, w, ij, L0, at, lam, colour, 0), show_values)
+                 lambda: _pass_hints(x, w, ij, L0, at, lam, colour, 0), show_values)
     jacobi = not _close(got[0], refs["gauss-seidel"][0])  # the positions matched Jacobi's: so must lambda
     _matches_one(got[1], [refs["jacobi" if jacobi else "gauss-seidel"][1]], f"lam_new of {call}",
-                 _pass_hints(x, w, ij, L0, at, lam, colour, 1), show_values)
+                 lambda: _pass_hints(x, w, ij, L0, at, lam, colour, 1), show_values)
 
 
 def _close(got, expected, rtol=TIGHT, atol=1e-12):
@@ -310,7 +313,7 @@ def _check_step(student, args, call, show_values):
                                  "gravity and never move")
     for part, label in ((0, "x_new"), (1, "v_new")):
         _matches_one(got[part], [refs["gauss-seidel"][part], refs["jacobi"][part]], f"{label} of {call}",
-                     _step_hints(args, part), show_values, rtol=1e-9, atol=1e-10)
+                     lambda part=part: _step_hints(args, part), show_values, rtol=1e-9, atol=1e-10)
 
 
 @pytest.mark.points(2)
@@ -378,7 +381,7 @@ def test_chain_stiffness_by_hand(student):
     m, L0 = np.ones(3), np.ones(2)
     call = "chain_stiffness(x=[[0, 0], [0, -1.2], [0, -2.3]], m=[1, 1, 1], L0=[1, 1], g=9.81)"
     expect_float(student.call("chain_stiffness", x, m, L0, G, check_inputs=True), 3 * G / 0.3, call,
-                 rtol=1e-9, hints=_stiffness_hints(x, m, L0, G))
+                 rtol=1e-9, hints=lambda: _stiffness_hints(x, m, L0, G))
 
 
 @pytest.mark.points(1)
@@ -390,13 +393,14 @@ def test_chain_stiffness_random(student, rng):
     m = rng.uniform(0.005, 0.05, len(x))
     g = float(rng.uniform(5.0, 15.0))
     expect_float(student.call("chain_stiffness", x, m, L0, g, check_inputs=True), _chain_stiffness(x, m, L0, g),
-                 "chain_stiffness on a random chain", rtol=1e-9, hints=_stiffness_hints(x, m, L0, g),
+                 "chain_stiffness on a random chain", rtol=1e-9, hints=lambda: _stiffness_hints(x, m, L0, g),
                  show_values=False)
 
 
 # -- measured_stiffness ------------------------------------------------------------------------
 
 
+@memoized
 def _reference_measurement(k, h, substeps, iterations, method):
     """The notebook's measurement with the library's solver."""
     n, mass, length = STRING["n"], STRING["mass"], STRING["length"]

@@ -12,6 +12,8 @@ Modules:
   opened safely;
 * :mod:`~particles.course.grading.expect`: the checks tests use, each failing with a one-line
   reason;
+* :mod:`~particles.course.grading.memo`: reference results the tests compute once per session, not
+  once per notebook;
 * :mod:`~particles.course.grading.blame`: whose fault a failure is: the judged function or a failing
   helper of it;
 * :mod:`~particles.course.grading.figures`: figures in the feedback: the student's curve beside the

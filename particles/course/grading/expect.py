@@ -57,7 +57,13 @@ def _matches(value, wrong, rtol, atol):
 
 
 def _hint(value, hints, rtol, atol):
-    """The clause of the first hint `value` matches (``"your result matches <label>"``), else None."""
+    """The clause of the first hint `value` matches (``"your result matches <label>"``), else None.
+
+    `hints` is a dict, None, or a function of no arguments returning one: computed here, only for a
+    value that failed.
+    """
+    if callable(hints):
+        hints = hints()
     for label, wrong in (hints or {}).items():
         verdict = _matches(value, wrong, rtol, atol)
         if verdict:
@@ -125,7 +131,7 @@ def expect_array(value, expected, call, rtol=1e-10, atol=1e-12, hints=None, show
         How the call reads in a message, e.g. ``"euler_step(f, X, t=0, h=0.1)"``.
     rtol, atol : float
         Passes when ``|value - expected| <= atol + rtol |expected|`` everywhere.
-    hints : dict, optional
+    hints : dict or callable, optional
         Label -> a typical wrong answer: an array (``{"a midpoint step": ...}``,
         matched to the same tolerance, also when its shape is not the
         expected one) or a predicate ``wrong(value)`` (a pattern, e.g. a
@@ -135,6 +141,10 @@ def expect_array(value, expected, call, rtol=1e-10, atol=1e-12, hints=None, show
         step"``, or the label alone when it starts with ``"your "``
         (``"; your first record is not X0: ..."``). When it matches none,
         :func:`diagnose` may still name a pattern (float32, a factor ln(10)).
+        A function of no arguments returning such a dict
+        (``hints=lambda: {"a midpoint step": midpoint(f, X, t, h)}``) is
+        called only when the value is wrong: typical wrong answers that take
+        time to compute cost nothing for a right one.
     show_values : bool
         Print the error, the value got and the value expected at the worst
         index (default). Hidden tests pass False: the message then gives the

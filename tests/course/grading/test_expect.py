@@ -38,6 +38,24 @@ def test_a_predicate_hint_and_its_own_clause():
     assert "; your" not in _message(np.array([0.0, 2.5]), np.array([1.0, 2.0]), hints=broken)
 
 
+def test_hints_given_as_a_function_are_computed_only_for_a_wrong_result():
+    """``hints=lambda: {...}`` costs nothing for a right result; a wrong one (value or shape) is still named."""
+    asked = []
+
+    def hints():
+        asked.append(1)
+        return {"a midpoint step": np.array([1.0, 3.0])}
+
+    expect_array(np.array([1.0, 2.0]), np.array([1.0, 2.0]), "f(x)", hints=hints)
+    expect_float(2.0, 2.0, "g(x)", hints=hints)
+    assert asked == []
+    assert _message(np.array([1.0, 3.0]), np.array([1.0, 2.0]), hints=hints).endswith(
+        "; your result matches a midpoint step")
+    assert "expected shape (2, 2); your result matches a midpoint step" in \
+        _message(np.array([1.0, 3.0]), np.ones((2, 2)), hints=hints)
+    assert len(asked) == 2
+
+
 def test_float32_results_are_named():
     """A float32 result, or float64 numbers rounded to float32 on the way, is named single precision."""
     x = np.array([1 / 3, 2 / 3, 0.1])
