@@ -342,6 +342,9 @@ def record_of(item, outcome, excinfo, seconds):
 @pytest.hookimpl(hookwrapper=True)
 def pytest_runtest_makereport(item, call):
     outcome = yield
+    if "_particles_submission" not in getattr(item, "fixturenames", ()) and \
+            not hasattr(getattr(item, "module", None), "EXERCISE"):
+        return  # not a test of an exercise (another test of the same session): nothing to record
     report = outcome.get_result()
     if not hasattr(item, "_particles_start"):
         item._particles_start = time.perf_counter()
