@@ -57,12 +57,7 @@ def _players(nb):
             if "<script" in o.get("data", {}).get("text/html", "")]
 
 
-# Last lecture first: when the claims test (first lecture first) runs at the same time on the other
-# worker, each executes the lectures the other has not reached yet, instead of waiting on its lock.
-BACKWARDS = LECTURES[::-1]
-
-
-@pytest.mark.parametrize("path", BACKWARDS, ids=[p.name for p in BACKWARDS])
+@pytest.mark.parametrize("path", LECTURES, ids=[p.name for p in LECTURES])
 def test_lecture_runs_clean_with_an_animation(path, executed_lecture):
     """A lecture runs top to bottom in a fresh kernel without errors and embeds an animation player."""
     nb = executed_lecture(path)
@@ -78,7 +73,7 @@ def _figures(nb):
 
 def _figure_cases():
     few = pytest.mark.xfail(strict=True, reason="listed in FEW_FIGURES: draws too few figures yet")
-    return [pytest.param(p, id=p.name, marks=[few] if p.name in FEW_FIGURES else []) for p in BACKWARDS]
+    return [pytest.param(p, id=p.name, marks=[few] if p.name in FEW_FIGURES else []) for p in LECTURES]
 
 
 def test_few_figures_names_existing_lectures():
