@@ -28,7 +28,13 @@ $(VENV)/.installed-lab: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e '.[lab]'
 	touch $@ $(VENV)/.installed
 
+# The package's bytecode, written here: where PYTHONDONTWRITEBYTECODE is set (as in some containers) no
+# process writes it, and every process that imports particles (each grading worker, each notebook kernel)
+# would compile the sources again. Only the files changed since the last time are compiled.
+BYTECODE = $(BIN)/python -m compileall -q -j 0 particles tests bench
+
 demo: $(VENV)/.installed
+	$(BYTECODE)
 	$(BIN)/particles tour --out $(OUT)
 
 # System tools the tests need (headless Chromium for the course-site tests), installed once, here,
@@ -38,7 +44,11 @@ $(VENV)/.system-tools: .ci/install-system-tools | $(BIN)/python
 	touch $@
 
 # two workers (pytest-xdist), a test file per worker at a time: module fixtures (a graded corpus) run once
+# then the numba kernels, compiled once into the disk cache by two processes (about 50 s on a fresh clone,
+# 2 s after): without it both test workers, and the notebooks they start, compile the same kernels
 test: $(VENV)/.installed-dev $(VENV)/.system-tools
+	$(BYTECODE)
+	$(BIN)/particles warm --jobs 2
 	$(BIN)/python -m pytest -n 2 --dist loadfile
 
 lab: $(VENV)/.installed-lab

@@ -239,6 +239,11 @@ def _similarity(args):
     return 0  # a report, whatever it found
 
 
+def _warm(args):
+    from .backends.warm import command
+    return command(args.jobs)
+
+
 def build_parser():
     from .demos import DEMOS
 
@@ -268,6 +273,10 @@ def build_parser():
     study.add_argument("name", choices=["order", "stability", "provot", "discretization", "bounce", "all"])
     study.add_argument("--out", default="out/studies", help="output folder (default: out/studies)")
     study.set_defaults(run=_study)
+
+    warm = sub.add_parser("warm", help="compile the numba kernels into their disk cache, ahead of use")
+    warm.add_argument("--jobs", type=int, default=1, help="processes sharing the work (default 1)")
+    warm.set_defaults(run=_warm)
 
     site = sub.add_parser("site", help="execute the lectures and write a static HTML course site")
     site.add_argument("--out", default="site", help="output folder (default: site)")

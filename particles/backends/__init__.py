@@ -103,6 +103,8 @@ Modules
 -------
 * :mod:`particles.backends.compiled`: the numba drivers, one per compiled force, and the compiled step;
 * :mod:`particles.backends.xpbdstep`: the compiled XPBD substep;
+* :mod:`particles.backends.warm`: every compiled path run once on small systems, so that the kernels are
+  compiled into the disk cache ahead of use (``particles warm``, which ``make test`` runs first);
 * :mod:`particles.backends.fixes`: Provot's pass and the collider as compiled fixes of a step's end state;
 * :mod:`particles.backends.factored`: the prefactorized implicit solver's local step, triangular solves
   over its kept factorization and residual (:class:`~particles.implicit.Prefactored` with ``backend=``);

@@ -8,8 +8,6 @@ the zones' vertices, until no collision is left. :class:`ImpactZoneStage` holds 
 """
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from .proximity import dot
 
@@ -47,6 +45,7 @@ class ImpactZoneStage:
 
     def _impact_zones(self, impacts, x0, vbar, t, h):
         """Merge, move rigidly, detect again, until no collision is left; returns counts."""
+        import scipy.sparse.csgraph
         n = self.n
         pinned = self.w == 0
         rows, cols = [], []
@@ -69,8 +68,8 @@ class ImpactZoneStage:
             anchor[hold] = owner[hold]
             active |= hold
             r, c = np.concatenate(rows), np.concatenate(cols)
-            graph = coo_matrix((np.ones(len(r)), (r, c)), shape=(n, n))
-            _, labels = connected_components(graph, directed=False)
+            graph = scipy.sparse.coo_matrix((np.ones(len(r)), (r, c)), shape=(n, n))
+            _, labels = scipy.sparse.csgraph.connected_components(graph, directed=False)
             zone = np.zeros(labels.max() + 1, dtype=bool)
             zone[labels[active]] = True
             members = np.flatnonzero(zone[labels])

@@ -31,9 +31,6 @@ References
 """
 
 import numpy as np
-import scipy.sparse
-import scipy.sparse.linalg
-import scipy.special
 
 from .._checks import as_float_array, count, index_array, nonnegative_number, per_item, positive_number
 from ..errors import ConvergenceError
@@ -127,6 +124,7 @@ class RigidRods(Force):
 
     def _solve(self, d, w, rhs):
         """Solve (J W J^T) mu = rhs for rods of directions d (s, dim), inverse masses w."""
+        import scipy.sparse.linalg
         i, j, s = self.i, self.j, len(self.i)
         # (J W J^T)_kl = sum over shared particles p of w_p (+-d_k).(+-d_l)
         if s <= DENSE_LIMIT:
@@ -145,6 +143,7 @@ class RigidRods(Force):
 
     def _jacobian(self, d, n):
         """J as a sparse (s, n dim) matrix, particle-major columns."""
+        import scipy.sparse
         s, dim = d.shape
         rows = np.repeat(np.arange(s), 2 * dim)
         cols = np.concatenate([self.i[:, None] * dim + np.arange(dim), self.j[:, None] * dim + np.arange(dim)],
@@ -333,6 +332,7 @@ def pendulum_period(theta0, length=1.0, g=9.81):
     >>> round(pendulum_period(np.radians(120.0)) / pendulum_period(1e-6), 4)
     1.3729
     """
+    import scipy.special
     theta0 = float(theta0)
     if not abs(theta0) < np.pi:
         raise ValueError(f"theta0 must lie in (-pi, pi) radians, got {theta0!r}")

@@ -12,8 +12,6 @@ References
 """
 
 import numpy as np
-import scipy.sparse
-import scipy.sparse.linalg
 
 from .._checks import count, positive_number
 from ..errors import ConvergenceError
@@ -247,11 +245,13 @@ class BaraffWitkin(SpringSolver):
 
     def _jacobians(self, X):
         """K = dF/dx (springs, clamped) and D = dF/dv (springs and Damping), sparse, at X."""
+        import scipy.sparse
         K, D = self.system.spring_jacobians(X, clamp=True)
         return K, D - scipy.sparse.diags(self._damping)
 
     def _solve(self, K, D, h, b, guess):
         """Solve A dv = b, A = M - h D - h^2 K, on the free coordinates (pinned: dv = 0)."""
+        import scipy.sparse
         dofs = self._dofs
         M = scipy.sparse.diags(self._mass)
         A = (M - h * D - h * h * K).tocsr()[dofs][:, dofs]
@@ -283,6 +283,7 @@ class BaraffWitkin(SpringSolver):
 
 def _block_jacobi(A, d):
     """The inverses of the d x d diagonal blocks of A (one per particle), as a block-diagonal matrix."""
+    import scipy.sparse
     C = A.tocoo()
     same = C.row // d == C.col // d
     blocks = np.zeros((A.shape[0] // d, d, d))
@@ -293,6 +294,7 @@ def _block_jacobi(A, d):
 
 def _block_cg(A, b, guess, tol, maxiter, d):
     """Block-Jacobi preconditioned conjugate gradients; returns (x, iterations, converged)."""
+    import scipy.sparse.linalg
     ticks = [0]
 
     def tick(_):

@@ -12,7 +12,6 @@ References
 """
 
 import numpy as np
-import scipy.sparse
 
 from .._checks import count, positive_number
 from ..backends import check_backend, kernels_for
@@ -136,6 +135,7 @@ class Prefactored(SpringSolver):
         self._factor(positive_number(h, "h", "seconds"))
 
     def _factor(self, h):
+        import scipy.sparse
         n, i, j, k = self.system.n, self._i, self._j, self._k
         L = scipy.sparse.coo_matrix(
             (np.concatenate([k, k, -k, -k]), (np.concatenate([i, j, i, j]), np.concatenate([i, j, j, i]))),

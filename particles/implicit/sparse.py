@@ -7,7 +7,6 @@ first order. :func:`free_dofs` and :func:`factorize` are the sparse pieces both 
 """
 
 import numpy as np
-import scipy.sparse.linalg
 
 from ..integrators.solvers import Solver
 
@@ -63,5 +62,6 @@ def factorize(A):
     scipy.sparse.linalg.SuperLU
         Its ``solve(b)`` solves ``A x = b``.
     """
+    import scipy.sparse.linalg
     return scipy.sparse.linalg.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                                     options={"SymmetricMode": True})

@@ -33,8 +33,6 @@ References
 import math
 
 import numpy as np
-import scipy.sparse
-import scipy.sparse.linalg
 
 from .._checks import count, nonnegative_number
 from ..errors import ConvergenceError
@@ -254,6 +252,7 @@ _DENSE_FD_MAX = 200
 
 def _jacobian_operator(f, Y, t, fY):
     """Matrix-free J v ~ (f(Y + eps v) - f(Y)) / eps, as a LinearOperator."""
+    import scipy.sparse.linalg
     shape, N = Y.shape, Y.size
     scale = 1.0 + np.linalg.norm(Y.ravel(), np.inf)
 
@@ -377,6 +376,7 @@ def implicit_euler(f, X, t, h, jac=None, tol=1e-10, max_iter=50):
 
 def _newton_update(f, Y, t, h, fY, G, jac, eta=1e-8):
     """Solve ``(I - h J) dY = -G`` with J = df/dX at (Y, t); matrix-free to the relative residual `eta`."""
+    import scipy.sparse.linalg
     N = Y.size
     if jac is not None:
         J = jac(Y, t)

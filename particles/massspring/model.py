@@ -12,7 +12,6 @@ for the naive and physical scalings).
 """
 
 import numpy as np
-import scipy.sparse
 
 from .._checks import nonnegative_number
 from ..forces.fields import Damping, Gravity
@@ -87,6 +86,7 @@ class MassSpringSystem(ParticleSystem):
         See :meth:`particles.springs.Springs.jacobians`; `clamp` keeps
         ``-dF/dx`` positive semi-definite for implicit integration.
         """
+        import scipy.sparse
         X = self.X if X is None else self._check_state(X)
         n, d = X.shape[0], X.shape[2]
         Kx = scipy.sparse.csr_matrix((n * d, n * d))

@@ -1,0 +1,222 @@
+"""Compile the kernels ahead of use: every compiled path of the library once, on small systems.
+
+numba compiles a kernel the first time it is called with new argument types
+(seconds per kernel, about a minute and a half for all of them) and keeps
+the machine code in its disk cache (:mod:`particles.backends`). Without a
+warm cache, each new process pays again, and processes started at the same
+time (two test workers, a class's notebooks opened at once) each compile the
+same kernel. :func:`warm` pays once, ahead: it runs each compiled path of the
+library (the explicit step of cloth, strings and hair with all their forces,
+Provot's pass, the collider, XPBD and PBD, Lennard-Jones, N-body gravity, the
+cloth collision pipeline, the prefactorized solver) on systems of a few
+dozen particles, once with every loop parallel and once with every loop on
+one thread, so that both copies of each kernel are compiled for the
+argument types the library passes.
+
+``particles warm`` runs it from the command line (for example in a course's
+container image, or before ``make test``); a kernel already in the cache is
+loaded, not compiled, so a second call takes a few seconds. Kernels that
+:func:`warm` misses are compiled on first use, as before: nothing depends on
+it but the time.
+"""
+
+import contextlib
+import sys
+import time
+
+import numpy as np
+
+__all__ = ["warm", "command"]
+
+
+@contextlib.contextmanager
+def _loops(parallel):
+    """Every compiled loop parallel (`parallel`) or none, within the block (numba on two threads if it can)."""
+    import numba
+
+    import particles.backends._kernels as kernels
+
+    from . import compiled
+
+    before = kernels.PARALLEL_MIN, compiled.SPRING_THREADS, numba.get_num_threads()
+    kernels.PARALLEL_MIN = 0 if parallel else 10**9  # what pick() compares a loop's size with
+    compiled.SPRING_THREADS = 1 if parallel else before[1]  # springs: forces per spring, then a gather
+    numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+    try:
+        yield
+    finally:
+        kernels.PARALLEL_MIN, compiled.SPRING_THREADS = before[:2]
+        numba.set_num_threads(before[2])
+
+
+def _explicit():
+    """The compiled step and the per-force kernels: cloth, strings and hair with their documented forces."""
+    from ..collisions import Collider, Sphere
+    from ..constraints import ProvotConstraint
+    from ..massspring import cloth, hair, string
+
+    h = 1e-4
+    systems = [cloth(6, 6, scaling="physical", damping=0.05, kd=2e-4, bending_modulus=1e-4, wind=(2.0, 0.0, 1.0)),
+               cloth(6, 6, scaling="physical", pins="top edge"),
+               string(12, kd=0.01), string(12, d=3, kd=0.01, damping=0.1), hair(10, kd=0.001),
+               hair(10, d=3, direction=[1.0, 0.0, 0.2], damping=0.05)]
+    for c in systems:  # a loop over the few systems
+        c.run(3 * h, h, method="symplectic_euler")
+        c.derivative(c.state(), 0.0)
+        c.set_state(np.asfortranarray(c.state()), 0.0)  # states NumPy's steppers give: the F-ordered forms
+        c.run(c.t + 2 * h, h, method="symplectic_euler")
+        c.derivative(np.asfortranarray(c.state()), c.t)
+    c = cloth(6, 6, scaling="physical")
+    c.run(3 * h, h, method=ProvotConstraint.from_system(c).stepper("symplectic_euler"))
+    for d in (2, 3):
+        c = string(12, d=d, pin="none", kd=0.01) if d == 2 else cloth(6, 6, plane="horizontal", pins=None,
+                                                                      origin=(-0.5, -0.5, 0.02), scaling="physical")
+        centre = np.zeros(d)
+        centre[-1] = -0.3 if d == 3 else 0.0
+        ball = Sphere(centre, 0.3) if d == 3 else Sphere([0.5, -0.3], 0.3)
+        X = c.state()
+        X[:, 1, -1] = -1.0
+        c.set_state(X, 0.0)
+        inner = ProvotConstraint.from_system(c).stepper("symplectic_euler")
+        for method in (Collider(ball, restitution=0.0, friction=0.3).stepper("symplectic_euler", m=c.m,
+                                                                               pinned=c.pinned),
+                       Collider(ball, restitution=0.0, friction=0.3).stepper(inner, m=c.m, pinned=c.pinned)):
+            c.run(c.t + 3 * h, h, method=method)
+
+
+def _constraints():
+    """XPBD and PBD substeps (Gauss-Seidel and Jacobi), on cloth and hair."""
+    from ..massspring import cloth, hair
+    from ..xpbd import PBD, XPBD
+
+    for c in (cloth(6, 6, kd=0.1), cloth(6, 6, bending_modulus=1e-4, damping=0.05), hair(10, kd=0.2)):
+        for solver in (XPBD.from_system(c, substeps=2), XPBD.from_system(c, substeps=2, method="jacobi"),
+                       PBD.from_system(c, substeps=2)):
+            X = c.state()
+            solver(None, X, 0.0, 0.01)
+            solver(None, np.asfortranarray(X), 0.0, 0.01)
+
+
+def _pairs():
+    """Lennard-Jones (open and periodic) and N-body gravity."""
+    from ..forces import LennardJones, NBodyGravity
+    from ..md import fcc_lattice
+
+    x, box = fcc_lattice(4, 0.8)
+    for lj in (LennardJones.from_epsilon_sigma(skin=0.3, box=box), LennardJones.from_epsilon_sigma(skin=0.3)):
+        lj(x)
+    rng = np.random.default_rng(0)
+    NBodyGravity(G=1.0, softening=0.05)(rng.normal(size=(50, 3)), m=rng.uniform(0.5, 2.0, 50))
+
+
+def _cloth_collisions():
+    """The cloth collision pipeline (broad phase, proximity, the continuous test, impact zones) on a folding sheet."""
+    from ..collisions import ClothCollisions, Plane, TriangleMesh
+    from ..massspring import cloth
+    from ..xpbd import XPBD
+
+    n, h = 8, 1 / 120
+    c = cloth(n, n, width=1.0, height=1.0, plane="vertical", origin=(-0.5, 0.0, 0.05), pins=None,
+              scaling="physical", stretch_modulus=200.0, damping=0.2)
+    X = c.state()
+    X[:, 0, 1] += 0.05 * np.sin(np.pi * (X[:, 0, 0] + 0.5)) * (0.4 - X[:, 0, 2])
+    X[:, 1, 2] = -2.0
+    c.set_state(np.asfortranarray(X), 0.0)
+    mesh = TriangleMesh.grid(n, n)
+    cc = ClothCollisions.from_system(c, mesh, thickness=0.5 / (n - 1), bodies=[Plane([0, 0, 0], [0, 0, 1.0])],
+                                     friction=0.3)
+    c.run(4 * h, h, method=cc.stepper(XPBD.from_system(c, substeps=2, backend="numpy")))  # XPBD: "constraints"
+
+
+def _implicit():
+    """The prefactorized solver's compiled local step and solves, in 2D and 3D."""
+    from ..implicit import Prefactored
+    from ..massspring import cloth, string
+
+    for c in (cloth(6, 6, kd=0.0), string(12, kd=0.0)):
+        h = 0.01
+        c.run(2 * h, h, method=Prefactored(c, h, backend="numba"))
+
+
+PARTS = {"explicit step": _explicit, "cloth collisions": _cloth_collisions, "constraints": _constraints,
+         "pairs": _pairs, "implicit": _implicit}
+"""The parts of :func:`warm`, longest first (seconds to compile on a 2-core machine: 57, 28, 11, 6, 3)."""
+
+
+def _part(name):
+    """One part, both loop modes, in this process: (name, seconds)."""
+    from . import using
+
+    t = time.perf_counter()
+    with using("numba"):
+        for parallel in (True, False):
+            with _loops(parallel):
+                PARTS[name]()
+    return name, time.perf_counter() - t
+
+
+def warm(parts=None, jobs=1, report=None):
+    """Compile (or load from the disk cache) the kernels of each compiled path, parallel and serial copies.
+
+    Parameters
+    ----------
+    parts : list of str, optional
+        Keys of :data:`PARTS` (default: all).
+    jobs : int, optional
+        Processes that share the parts (default 1: this one). Parts in other processes compile into the
+        same disk cache; this process's own kernels are then loaded on first use.
+    report : callable, optional
+        Called with one line per part as it ends (its name and seconds).
+
+    Returns
+    -------
+    float
+        Seconds taken.
+
+    Raises
+    ------
+    ImportError
+        When numba is not installed (``pip install 'particles[fast]'``).
+    ValueError
+        For a part that is not in :data:`PARTS`, or `jobs` below 1.
+    """
+    from . import available
+
+    if "numba" not in available():
+        raise ImportError("warm compiles the numba kernels, and numba is not installed: "
+                          "pip install 'particles[fast]'")
+    names = list(PARTS) if parts is None else list(parts)
+    unknown = [p for p in names if p not in PARTS]
+    if unknown:
+        raise ValueError(f"parts must be among {list(PARTS)}, got {unknown}")
+    if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 1:
+        raise ValueError(f"jobs must be a positive integer, got {jobs!r}")
+    start = time.perf_counter()
+    if jobs == 1:
+        done = map(_part, names)
+    else:  # the longest parts first (the order of PARTS), each to the next free process
+        import concurrent.futures
+        import multiprocessing
+
+        pool = concurrent.futures.ProcessPoolExecutor(min(jobs, len(names)),
+                                                      mp_context=multiprocessing.get_context("spawn"))
+        done = (f.result() for f in concurrent.futures.as_completed([pool.submit(_part, n) for n in names]))
+    try:
+        for name, seconds in done:  # a loop over the few parts
+            if report is not None:
+                report(f"{name}: {seconds:.1f} s")
+    finally:
+        if jobs > 1:
+            pool.shutdown()
+    return time.perf_counter() - start
+
+
+def command(jobs=1):
+    """``particles warm [--jobs N]``: :func:`warm`, a line per part; exit status 2 with the reason on bad input."""
+    try:
+        seconds = warm(jobs=jobs, report=lambda line: print(f"  {line}", flush=True))
+    except (ImportError, ValueError) as error:
+        print(f"particles warm: {error}", file=sys.stderr)
+        return 2
+    print(f"kernels compiled or loaded in {seconds:.1f} s")
+    return 0
