@@ -45,15 +45,12 @@ $(VENV)/.system-tools: .ci/install-system-tools | $(BIN)/python
 
 # two workers (pytest-xdist), a test file per worker at a time: module fixtures (a graded corpus) run once
 # then the numba kernels, compiled once into the disk cache by two processes (about 50 s on a fresh clone,
-# 2 s after): without it both test workers, and the notebooks they start, compile the same kernels. It
-# runs beside the first test files (the course's tools, which use no kernel and leave a core idle while
-# they wait on their workers), so the library's tests find the cache warm. Only a speed-up: if it fails,
-# the tests compile what they use, as before
+# 2 s after): without it both test workers, and the notebooks they start, compile the same kernels. Only
+# a speed-up: if it fails, the tests compile what they use, as before
 test: $(VENV)/.installed-dev $(VENV)/.system-tools
 	$(BYTECODE)
-	($(BIN)/particles warm --jobs 2 || echo "particles warm failed: the tests compiled what they use") \
-		> $(VENV)/warm.log 2>&1 & \
-	$(BIN)/python -m pytest -n 2 --dist loadfile; status=$$?; wait; cat $(VENV)/warm.log; exit $$status
+	$(BIN)/particles warm --jobs 2 || echo "particles warm failed: the tests will compile the kernels they use"
+	$(BIN)/python -m pytest -n 2 --dist loadfile
 
 lab: $(VENV)/.installed-lab
 	$(BIN)/jupyter lab .
