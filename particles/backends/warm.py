@@ -68,20 +68,16 @@ def _explicit():
         c.derivative(np.asfortranarray(c.state()), c.t)
     c = cloth(6, 6, scaling="physical")
     c.run(3 * h, h, method=ProvotConstraint.from_system(c).stepper("symplectic_euler"))
-    for d in (2, 3):
-        c = string(12, d=d, pin="none", kd=0.01) if d == 2 else cloth(6, 6, plane="horizontal", pins=None,
-                                                                      origin=(-0.5, -0.5, 0.02), scaling="physical")
-        centre = np.zeros(d)
-        centre[-1] = -0.3 if d == 3 else 0.0
-        ball = Sphere(centre, 0.3) if d == 3 else Sphere([0.5, -0.3], 0.3)
+    falling = [(string(12, pin="none", kd=0.01), Sphere([0.5, -0.3], 0.3)),
+               (cloth(6, 6, plane="horizontal", pins=None, origin=(-0.5, -0.5, 0.02), scaling="physical"),
+                Sphere([0.0, 0.0, -0.3], 0.3))]
+    for c, ball in falling:  # a string in 2D and a sheet in 3D, falling at 1 m/s onto a ball
         X = c.state()
         X[:, 1, -1] = -1.0
         c.set_state(X, 0.0)
-        inner = ProvotConstraint.from_system(c).stepper("symplectic_euler")
-        for method in (Collider(ball, restitution=0.0, friction=0.3).stepper("symplectic_euler", m=c.m,
-                                                                               pinned=c.pinned),
-                       Collider(ball, restitution=0.0, friction=0.3).stepper(inner, m=c.m, pinned=c.pinned)):
-            c.run(c.t + 3 * h, h, method=method)
+        for inner in ("symplectic_euler", ProvotConstraint.from_system(c).stepper("symplectic_euler")):
+            c.run(c.t + 3 * h, h, method=Collider(ball, restitution=0.0, friction=0.3).stepper(inner, m=c.m,
+                                                                                             pinned=c.pinned))
 
 
 def _constraints():
@@ -110,22 +106,11 @@ def _pairs():
 
 
 def _cloth_collisions():
-    """The cloth collision pipeline (broad phase, proximity, the continuous test, impact zones) on a folding sheet."""
-    from ..collisions import ClothCollisions, Plane, TriangleMesh
-    from ..massspring import cloth
-    from ..xpbd import XPBD
+    """The cloth collision pipeline (broad phase, proximity, the continuous test, impact zones): a small sheet
+    dropped on a ball on the floor (:func:`particles.explore.cloth_drop`), just above it."""
+    from ..explore import cloth_drop
 
-    n, h = 8, 1 / 120
-    c = cloth(n, n, width=1.0, height=1.0, plane="vertical", origin=(-0.5, 0.0, 0.05), pins=None,
-              scaling="physical", stretch_modulus=200.0, damping=0.2)
-    X = c.state()
-    X[:, 0, 1] += 0.05 * np.sin(np.pi * (X[:, 0, 0] + 0.5)) * (0.4 - X[:, 0, 2])
-    X[:, 1, 2] = -2.0
-    c.set_state(np.asfortranarray(X), 0.0)
-    mesh = TriangleMesh.grid(n, n)
-    cc = ClothCollisions.from_system(c, mesh, thickness=0.5 / (n - 1), bodies=[Plane([0, 0, 0], [0, 0, 1.0])],
-                                     friction=0.3)
-    c.run(4 * h, h, method=cc.stepper(XPBD.from_system(c, substeps=2, backend="numpy")))  # XPBD: "constraints"
+    cloth_drop(200.0, n=8, T=0.1, h=1 / 40, drop=0.005, snapshots=2)
 
 
 def _implicit():
@@ -140,7 +125,8 @@ def _implicit():
 
 PARTS = {"explicit step": _explicit, "cloth collisions": _cloth_collisions, "constraints": _constraints,
          "pairs": _pairs, "implicit": _implicit}
-"""The parts of :func:`warm`, longest first (seconds to compile on a 2-core machine: 57, 28, 11, 6, 3)."""
+"""The parts of :func:`warm`, longest first (each took 45-50, 24-25, 10-11, 6 and 1-2 s to compile in
+``particles warm --jobs 2`` on the 2-core machine, 2026-12-06)."""
 
 
 def _part(name):
