@@ -193,6 +193,33 @@ class ParticleSystem(Population):
         step = compiled_step(self)
         return None if step is None else step.symplectic_euler(X, t, h)
 
+    def fused_symplectic_euler_steps(self, X, times, limit):
+        """Symplectic Euler steps from ``times[0]`` to ``times[-1]`` in one compiled call, or None.
+
+        :func:`particles.integrators.integrate` calls it, through ``symplectic_euler.steps``, for
+        the steps between two recorded states of a run without hooks; see
+        :meth:`particles.backends.compiled.CompiledStep.symplectic_euler_steps`.
+
+        Parameters
+        ----------
+        X : ndarray, shape (n, 2, d)
+            Positions (m) and velocities (m/s), float64. Not modified.
+        times : ndarray, shape (K + 1,)
+            The steps' times, in seconds, increasing.
+        limit : float
+            The divergence guard: the steps stop after the first state with an
+            entry larger than `limit` in magnitude, or not finite.
+
+        Returns
+        -------
+        (ndarray, int, float) or None
+            The last state that passed, the number of steps that passed and the
+            size ``max|X|`` of the last state computed; None when no compiled
+            step applies to all the steps (then each is taken by itself).
+        """
+        step = compiled_step(self)
+        return None if step is None else step.symplectic_euler_steps(X, times, limit)
+
     def reaction_forces(self, X=None, t=None):
         """Force each pin exerts on its particle, by inverse dynamics.
 

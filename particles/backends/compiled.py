@@ -17,7 +17,7 @@ from ._kernels import incidence, parallel, pick, rank_blocks, spring_forces, spr
 from ._kernels import lennard_jones as lennard_jones_pairs
 from ._kernels import nbody as nbody_sums
 from ._pbd_kernels import distance_group, distance_jacobi
-from ._step_kernels import clamp_forces, symplectic_euler_blocks
+from ._step_kernels import clamp_forces, symplectic_euler_steps
 from .cloth import cloth_candidates, cloth_closest, cloth_first_contacts, cloth_incidence
 from .cloth import cloth_jacobi, cloth_proximity
 from .fixes import collide, provot
@@ -331,17 +331,18 @@ class CompiledStep:
         """An array for a new state (C order, which the next step reads faster): an earlier one if free, else new.
 
         A run holds the state it steps from and drops the one before, so two
-        arrays take turns. One is free when this list is its only holder
+        arrays take turns (three when steps run in one call,
+        :meth:`symplectic_euler_steps`, which writes two). One is free when this list is its only holder
         (CPython's reference count, compared with that of an object only a
         list holds, :data:`_ALONE`), and then no one can see it change; a new
         array costs a page fault per 4 KiB when first written (about a tenth
         of the step at 128^2).
         """
-        for spare in self._spare:  # a loop over at most two arrays
+        for spare in self._spare:  # a loop over at most three arrays
             if spare.shape == shape and sys.getrefcount(spare) == _ALONE:
                 return spare
         out = np.empty(shape)
-        self._spare[:] = [out] + self._spare[:1]
+        self._spare[:] = [out] + self._spare[:2]
         return out
 
     def _other(self, found, layout, X, t):
@@ -362,15 +363,8 @@ class CompiledStep:
             force.add_to(other, x, X[:, 1], t, self.system.m)
         return other
 
-    def symplectic_euler(self, X, t, h):
-        """One symplectic Euler step from X (n, 2, d) at t by h, compiled; None when it does not apply.
-
-        It does not apply (and the caller takes the NumPy step) when X is not
-        the system's state shape, when a spring set does not resolve to the
-        numba backend (e.g. ``"auto"`` after particles were removed), when
-        the system has more than three spring sets, or, on ``"auto"``, when a
-        force has no compiled form (see :meth:`parts`).
-        """
+    def _prepared(self, X):
+        """What a step from X needs, ``(found, layout, arrays)``; None when the compiled step does not apply."""
         system = self.system
         n = system.n
         if X.shape != system.X.shape or X.dtype != np.float64 or (found := self.parts(n)) is None:
@@ -387,21 +381,72 @@ class CompiledStep:
         else:
             b = len(bending.i)
             arrays += [*joints, _per_spring(bending.kb, b), _per_spring(bending.rest_angle, b)]
-        other = self._other(found, layout, X, t)
         pinned = system.pinned
         if layout["pinned"] is None or pinned.shape != layout["pinned"].shape or not (pinned == layout["pinned"]).all():
             layout["free"] = np.ones(n, dtype=np.bool_)
             layout["free"][system.pinned] = False
             layout["pinned"] = system.pinned.copy()
-        out = self._new_state(X.shape)
+        return found, layout, arrays
+
+    def _steps(self, prepared, X, ts, hs, other, limit, out0, out1):
+        """The kernel's steps from X at the times `ts` by `hs` (see :func:`~._step_kernels.symplectic_euler_steps`)."""
+        found, layout, arrays = prepared
+        system = self.system
+        n = system.n
         copy = not X.flags.c_contiguous  # rows (x_p, v_p) of a C-ordered state are read where they are
         xw = layout["xw"] if copy else X.reshape(n, 2 * system.d)
-        pick(symplectic_euler_blocks, len(layout["rows"][3]))(
+        sizes = layout.setdefault("sizes", np.empty(len(layout["start"]) - 1))
+        return pick(symplectic_euler_steps, len(layout["rows"][3]))(
             X, copy, layout["start"], layout["lo"], layout["hi"], layout["row0"], xw, layout["fw"],
-            *layout["rows"], *arrays, float(found.D), float(found.R), _wind_table(found.winds, t, system.d),
+            *layout["rows"], *arrays, float(found.D), float(found.R), _wind_table(found.winds, ts, system.d),
             layout["other"] if other is None else other, other is not None,
-            np.ascontiguousarray(system.m, dtype=np.float64), layout["free"], tuple(found.G.tolist()), float(h), out)
+            np.ascontiguousarray(system.m, dtype=np.float64), layout["free"], tuple(found.G.tolist()), hs,
+            float(limit), out0, out1, sizes)
+
+    def symplectic_euler(self, X, t, h):
+        """One symplectic Euler step from X (n, 2, d) at t by h, compiled; None when it does not apply.
+
+        It does not apply (and the caller takes the NumPy step) when X is not
+        the system's state shape, when a spring set does not resolve to the
+        numba backend (e.g. ``"auto"`` after particles were removed), when
+        the system has more than three spring sets, or, on ``"auto"``, when a
+        force has no compiled form (see :meth:`parts`).
+        """
+        prepared = self._prepared(X)
+        if prepared is None:
+            return None
+        other = self._other(prepared[0], prepared[1], X, t)
+        out = self._new_state(X.shape)
+        self._steps(prepared, X, np.array([t], dtype=float), np.array([h], dtype=float), other, np.inf, out, out)
         return out
+
+    def symplectic_euler_steps(self, X, times, limit):
+        """The symplectic Euler steps from X at ``times[0]`` to ``times[-1]`` in one compiled call, guarded.
+
+        Step k goes from ``times[k]`` to ``times[k + 1]``. After each step
+        the largest ``|entry|`` of the new state is compared with `limit`
+        (the divergence guard of :func:`particles.integrators.integrate`),
+        and the steps stop after the first state that is larger or not
+        finite. No Python runs between the steps, so this applies only when
+        every force runs inside the kernel: not with clamps or forces without
+        a compiled form (then, and where :meth:`symplectic_euler` does not
+        apply, it returns None and the caller takes one step at a time).
+
+        Returns
+        -------
+        (ndarray, int, float) or None
+            The last state that passed (shape (n, 2, d), C order; X itself
+            if none did), the number of steps that passed and the size of
+            the last state computed.
+        """
+        prepared = self._prepared(X)
+        if prepared is None or prepared[0].clamps or prepared[0].others:
+            return None
+        times = np.asarray(times, dtype=float)
+        out0 = self._new_state(X.shape)
+        out1 = self._new_state(X.shape)
+        taken, size = self._steps(prepared, X, times[:-1], np.diff(times), None, limit, out0, out1)
+        return (X if taken == 0 else out1 if taken % 2 == 0 else out0), int(taken), float(size)
 
 
 def _joints(bending, start, lo, hi):
@@ -425,13 +470,14 @@ def _joints(bending, start, lo, hi):
             *(np.ascontiguousarray(r, dtype=np.uint32) for r in ijl))
 
 
-def _wind_table(winds, t, d):
-    """The rows ``s, u, gust, t / period, wavelength, per_mass`` of the winds at time t, shape (k, 2 d + 4)."""
-    W = np.zeros((len(winds), 2 * d + 4))
+def _wind_table(winds, ts, d):
+    """The rows ``s, u, gust, t / period, wavelength, per_mass`` of the winds at each time of ts, shape (K, k, 2 d + 4)."""
+    W = np.zeros((len(ts), len(winds), 2 * d + 4))
     for q, wind in enumerate(winds):  # a loop over the few winds
         s = wind.strength
         norm = np.linalg.norm(s)
-        W[q, :d] = s
-        W[q, d:2 * d] = s / norm if norm > 0 else 0.0
-        W[q, 2 * d:] = wind.gust, t / wind.period, wind.wavelength, float(wind.per_mass)
+        W[:, q, :d] = s
+        W[:, q, d:2 * d] = s / norm if norm > 0 else 0.0
+        W[:, q, 2 * d:] = wind.gust, 0.0, wind.wavelength, float(wind.per_mass)
+        W[:, q, 2 * d + 1] = ts / wind.period
     return W

@@ -199,10 +199,36 @@ def symplectic_euler(f, X, t, h):
     return X_new
 
 
-def _compiled_step(f):
-    """The ``fused_symplectic_euler`` of `f`'s owner when `f` is a bound ``derivative`` method, else None."""
+def _compiled_step(f, name="fused_symplectic_euler"):
+    """The method `name` of `f`'s owner when `f` is a bound ``derivative`` method, else None."""
     owner = getattr(f, "__self__", None) if getattr(f, "__name__", None) == "derivative" else None
-    return getattr(owner, "fused_symplectic_euler", None)
+    return getattr(owner, name, None)
+
+
+def _symplectic_euler_steps(f, X, times, limit):
+    """Symplectic Euler from ``times[0]`` to ``times[-1]`` in one compiled call; None when it does not apply.
+
+    :func:`particles.integrators.integrate` calls it (as ``symplectic_euler.steps``) for the steps
+    between two recorded states when nothing runs between the steps: `f` must be a system's
+    ``derivative`` whose ``fused_symplectic_euler_steps`` applies (see
+    :meth:`particles.backends.compiled.CompiledStep.symplectic_euler_steps`). Each step is the one
+    :func:`symplectic_euler` takes, to the bit, and the divergence guard (``max|X| <= limit``,
+    finite) runs after each step inside the call.
+
+    Returns
+    -------
+    (ndarray, int, float) or None
+        The last state that passed the guard, the number of steps that passed, and the size
+        ``max|X|`` of the last state computed.
+    """
+    many = _compiled_step(f, "fused_symplectic_euler_steps")
+    if many is None:
+        return None
+    X, _ = check_arguments(X, times[0], times[1] - times[0])
+    return many(X, times, limit)
+
+
+symplectic_euler.steps = _symplectic_euler_steps
 
 
 @stepper(order=2, second_order_layout=True, fsal=True)
