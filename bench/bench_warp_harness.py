@@ -31,8 +31,12 @@ counts and that the springs join exactly the neighbours listed above):
 What differs from Warp's harness: everything here is float64 (Warp's and Taichi's runs are
 timed in float32 as there, and in float64 as the library computes); Warp's harness times every
 frame, the first one with its kernels' compilation, here one frame is run first (compiling) and
-three runs of the 60 timed frames follow, each from the initial state; the time per step is the
-best frame's time over 16 (the mean frame's in brackets). Warp's CPU backend runs its kernels on
+three runs of the 60 timed frames follow, each from the initial state, in rounds that alternate
+NumPy, numba and Warp (a slow minute of a shared machine then falls on all of them; Taichi runs
+after them, one precision at a time, as ``ti.init`` requires); the time per step is the best
+frame's time over 16 (the mean frame's in brackets). A run of ``run`` takes the 16 steps of a
+frame in one compiled call (:meth:`particles.backends.compiled.CompiledStep.symplectic_euler_steps`),
+its divergence guard included. Warp's CPU backend runs its kernels on
 one thread; numba runs the compiled step on ``numba.get_num_threads()`` threads (also timed on
 one) and Taichi on as many.
 
@@ -100,29 +104,44 @@ def flat(c):
                 L0=L0, k=k, kd=kd)
 
 
-def frames(simulate, reset, result):
-    """One frame (compiling), then ROUNDS runs of FRAMES timed frames from the start: times (s), end positions."""
-    simulate(0)
-    times = []
+def frames(runners):
+    """Each runner's first frame (compiling), then ROUNDS rounds in which every runner, in turn, runs FRAMES
+    timed frames from the start: {name: (times (s), end positions)}.
+
+    A runner is ``(simulate, reset, result)``. The rounds alternate the runners, so that a slow minute of a
+    shared machine falls on all of them alike and the ratios of their best frames stay fair.
+    """
+    times = {name: [] for name in runners}
+    for simulate, _, _ in runners.values():  # a loop over the few runners
+        simulate(0)
     for _ in range(ROUNDS):  # a loop over the rounds
-        reset()
-        for f in range(FRAMES):  # a loop over the frames
-            start = time.perf_counter()
-            simulate(f)
-            times.append(time.perf_counter() - start)
-    return np.array(times), result()
+        for name, (simulate, reset, _) in runners.items():  # a loop over the runners, in turn
+            reset()
+            for f in range(FRAMES):  # a loop over the frames
+                start = time.perf_counter()
+                simulate(f)
+                times[name].append(time.perf_counter() - start)
+    return {name: (np.array(times[name]), result()) for name, (_, _, result) in runners.items()}
 
 
-def ours(n, backend):
-    """The library's loop: ``run`` over each frame of 16 steps, symplectic Euler, with `backend`."""
+def ours(n, backend, threads=None):
+    """The library's loop as a runner: ``run`` over each frame of 16 steps, symplectic Euler, with `backend`
+    (and numba on `threads` threads if given)."""
+    import numba
+
     c = scene(n)
     X0 = c.state()
 
     def simulate(f):
-        c.run((f + 1) / FPS, H, method="symplectic_euler", every=SUBSTEPS)
+        before = numba.get_num_threads()
+        numba.set_num_threads(threads or before)
+        try:
+            with backends.using(backend):
+                c.run((f + 1) / FPS, H, method="symplectic_euler", every=SUBSTEPS)
+        finally:
+            numba.set_num_threads(before)
 
-    with backends.using(backend):
-        return frames(simulate, lambda: c.set_state(X0, 0.0), lambda: c.X[:, 0].copy())
+    return simulate, lambda: c.set_state(X0, 0.0), lambda: c.X[:, 0].copy()
 
 
 def warp(n, double):
@@ -159,7 +178,7 @@ def warp(n, double):
         arrays["read"] = x.numpy()  # back to the host, once per frame
 
     reset()
-    return frames(simulate, reset, lambda: arrays["read"].astype(np.float64))
+    return simulate, reset, lambda: arrays["read"].astype(np.float64)
 
 
 def _warp_kernels(wp, real, vec):
@@ -236,23 +255,20 @@ def taichi(n, double, threads):
         read["x"] = x.to_numpy()  # back to the host (and a sync), once per frame
 
     reset()
-    return frames(simulate, reset, lambda: read["x"].astype(np.float64))
+    return frames({"taichi": (simulate, reset, lambda: read["x"].astype(np.float64))})["taichi"]
 
 
 def measure(n, threads):
-    """Every implementation at n x n: {name: (times per frame, end positions)} (None: not installed)."""
-    import numba
+    """Every implementation at n x n: {name: (times per frame, end positions)} (None: not installed).
 
-    out = {"numpy": ours(n, "numpy"), "numba": ours(n, "numba")}
-    numba.set_num_threads(1)
-    try:
-        out["numba 1 thread"] = ours(n, "numba")
-    finally:
-        numba.set_num_threads(threads)
-    for name, run in (("warp f32", lambda: warp(n, False)), ("warp f64", lambda: warp(n, True)),
-                      ("taichi f32", lambda: taichi(n, False, threads)),
-                      ("taichi f64", lambda: taichi(n, True, threads))):
-        out[name] = run()
+    NumPy, numba (on all threads and on one) and Warp run in alternating rounds (:func:`frames`); Taichi
+    after them, each precision alone (``ti.init`` starts a new runtime, which drops the other's fields).
+    """
+    runners = {"numpy": ours(n, "numpy"), "numba": ours(n, "numba"), "numba 1 thread": ours(n, "numba", 1),
+               "warp f32": warp(n, False), "warp f64": warp(n, True)}
+    out = dict.fromkeys(runners)
+    out.update(frames({name: r for name, r in runners.items() if r is not None}))
+    out["taichi f32"], out["taichi f64"] = taichi(n, False, threads), taichi(n, True, threads)
     return out
 
 

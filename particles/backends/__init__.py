@@ -42,7 +42,7 @@ with ``np.bincount``, so the two agree to about 1e-15 relative (tested to
 ``tests/library/backends/test_force_contract.py``, and on larger ones,
 ``tests/library/backends/test_compiled.py``).
 
-**Determinism and threads.** Loops of 16k items or more run on numba's
+**Determinism and threads.** Loops of 4096 items or more run on numba's
 threads (``NUMBA_NUM_THREADS``, or :func:`numba.set_num_threads`); shorter
 ones on one. The result has the same bits for any number of threads: each
 output (a particle's force, a constraint's correction) is written by one
@@ -53,9 +53,17 @@ that depends on the system only) rather than with atomic additions; totals
 the same bits: a one-pass scatter on one thread, and forces per spring in
 parallel then a per-particle gather, which moves more memory and is used
 from four threads on. Unless ``NUMBA_THREADING_LAYER`` says otherwise, the
-threads are numba's own work queue, not OpenMP's, whose idle threads spin:
-on a machine shared with other processes that made the many short parallel
-loops of an XPBD step several times slower on two threads than on one.
+threads are GNU OpenMP's (numba's work queue where OpenMP does not load),
+with their wait between two parallel loops bounded by ``GOMP_SPINCOUNT=10000``
+(``bench/bench_threads.py``): the work queue took 35 us to start a parallel
+loop and woke its second thread too late to halve a 0.2 ms loop, OpenMP
+starts one in 5 us and halves it; OpenMP's default wait, a spin of
+milliseconds, made an XPBD substep (a parallel loop per colour) a hundred
+times slower beside another process doing the same on a 2-core machine.
+GNU OpenMP is not fork-safe: a process forked (not spawned) from one that
+ran a parallel loop must not run one itself (numba stops it with
+"Terminating: fork() called from a process already using GNU OpenMP");
+set ``NUMBA_THREADING_LAYER=workqueue`` for such a program.
 
 **The compiled step.** A force pass is only part of a step: around it the
 NumPy symplectic Euler step zeroes the force array, divides by the masses,

@@ -22,11 +22,18 @@ try:
 except ImportError:  # without the extra: importable (a walk over the package), never called
     numba, prange = None, range
 
-# numba's own thread pool unless the user chose one: on a machine shared with other processes, OpenMP's
-# threads spin between the many short parallel loops of a step (XPBD: one per colour) and a step then
-# takes several times longer on two threads than on one; the work queue does not spin
+# numba's threads, unless the user chose a layer: GNU OpenMP where it loads, else numba's own work queue. On
+# the 2-core VMs this was measured on (bench/bench_threads.py), the work queue wakes its sleeping threads so
+# slowly that a parallel loop of 0.2 ms ran no faster on two threads than on one, and every parallel loop
+# cost 35 us to start; OpenMP's threads start in 5 us and halve such a loop. Its idle threads wait for the
+# next loop by spinning, which on a machine shared with other processes takes their cores: by default for
+# milliseconds (an XPBD step, one parallel loop per colour, ran 100 times slower beside another such
+# process); GOMP_SPINCOUNT bounds the spin to a fraction of a millisecond, which keeps the back-to-back loops
+# of a step fast and costs a competing process no more than the work queue did.
 if numba is not None and "NUMBA_THREADING_LAYER" not in os.environ:
-    os.environ["NUMBA_THREADING_LAYER"] = "workqueue"
+    os.environ["NUMBA_THREADING_LAYER"] = "default"
+    os.environ.setdefault("NUMBA_THREADING_LAYER_PRIORITY", "omp workqueue tbb")  # tbb: not a dependency
+    os.environ.setdefault("GOMP_SPINCOUNT", "10000")  # read by GNU OpenMP when numba first loads it
     numba.config.reload_config()  # numba reads its settings from the environment (until its threads start)
 
 
@@ -49,8 +56,9 @@ if numba is not None and "NUMBA_CACHE_DIR" not in os.environ and _cache_folder()
     numba.config.reload_config()
 
 
-# loops shorter than this run on one thread: starting the threads would cost more than they save
-PARALLEL_MIN = 16384
+# loops shorter than this run on one thread: starting the threads would cost more than they save (OpenMP starts
+# a parallel loop in about 5 us; 4096 springs or constraint rows take 25-40 us on one thread)
+PARALLEL_MIN = 4096
 
 
 def _compile(fn, parallel, fastmath=False):

@@ -169,8 +169,8 @@ def substep(x, v, a, given, terms, m, free, hs, iterations, xpbd, segments, P,
     """
     dim, n = x.shape
     three = dim == 3
-    for e in range(dim):  # coordinate after coordinate: each a contiguous row of (d, n)
-        for p in prange(n):
+    for p in prange(n):  # particle after particle: its row of P written whole
+        for e in range(dim):
             if given:
                 acc = a[e, p]
             else:  # the forces' add_to in their order, then F / m (the NumPy solver's _accelerations)
@@ -211,8 +211,8 @@ def substep(x, v, a, given, terms, m, free, hs, iterations, xpbd, segments, P,
             else:
                 for r in prange(start, stop):
                     _linear_row(P, idx, c, wc, offset, lco, l_lam, r, dim, width, xpbd, damped)
-    for e in range(dim):
-        for p in prange(n):
+    for p in prange(n):
+        for e in range(dim):
             x[e, p] = P[p, e]
             v[e, p] = (P[p, e] - P[p, 3 + e]) / hs
     if measure:

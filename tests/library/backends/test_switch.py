@@ -82,3 +82,25 @@ def test_bad_backends_are_refused_with_a_clear_message(monkeypatch):
     with pytest.raises(ValueError, match=r"pip install 'particles\[fast\]'"):
         LennardJones.from_epsilon_sigma(backend="numba")
     assert backends.resolve("auto", 10**9) == "numpy"
+
+
+_LAYER = ("import os, numpy as np, numba, particles.backends._kernels as k; "
+          "from particles.backends._pbd_kernels import distance_violation as v; "
+          "x = np.random.rand(3, 9000); ij = np.stack([np.arange(8999), np.arange(1, 9000)], 1).astype(np.int32); "
+          "v(x, ij, np.ones((8999, 4)), np.empty(8999)); "
+          "print(numba.threading_layer(), os.environ.get('GOMP_SPINCOUNT'))")
+
+
+@needs_numba
+@pytest.mark.parametrize("chosen", [None, "workqueue"], ids=["the library's choice", "the user's"])
+def test_the_threads_are_openmp_with_a_bounded_spin_unless_the_user_chose(chosen):
+    """No NUMBA_THREADING_LAYER: OpenMP (or the work queue where it cannot load), spinning 10000; else the user's."""
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_THREADING_LAYER", "GOMP_SPINCOUNT")}
+    if chosen:
+        env["NUMBA_THREADING_LAYER"] = chosen
+    done = subprocess.run([sys.executable, "-c", _LAYER], capture_output=True, text=True, env=env, check=True)
+    layer, spin = done.stdout.split()
+    if chosen:
+        assert (layer, spin) == (chosen, "None")
+    else:
+        assert layer in ("omp", "workqueue") and spin == "10000"
