@@ -133,21 +133,20 @@ def query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, low, Q, T,
     if masked:
         for p in range(Q.shape[1]):
             q_in = q_in or mask[Q[q, p]]
-    c0 = np.empty(3, dtype=np.int64)
-    c1 = np.empty(3, dtype=np.int64)
-    for a in range(3):
-        c0[a] = cell_of(q_lo[q, a], origin, cell, shape, a)
-        c1[a] = cell_of(q_hi[q, a], origin, cell, shape, a)
-    for i in range(c0[0], c1[0] + 1):
-        for j in range(c0[1], c1[1] + 1):
-            for l in range(c0[2], c1[2] + 1):
+    # the cells the box covers, c0 to c1 along each axis (scalars: no array per query)
+    c00, c10 = cell_of(q_lo[q, 0], origin, cell, shape, 0), cell_of(q_hi[q, 0], origin, cell, shape, 0)
+    c01, c11 = cell_of(q_lo[q, 1], origin, cell, shape, 1), cell_of(q_hi[q, 1], origin, cell, shape, 1)
+    c02, c12 = cell_of(q_lo[q, 2], origin, cell, shape, 2), cell_of(q_hi[q, 2], origin, cell, shape, 2)
+    for i in range(c00, c10 + 1):
+        for j in range(c01, c11 + 1):
+            for l in range(c02, c12 + 1):
                 c = (i * shape[1] + j) * shape[2] + l
                 for e in range(ptr[c], ptr[c + 1]):
                     t = items[e]
                     if same and t <= q:
                         continue
                     # report from the cell at the componentwise maximum of the two lowest cells only
-                    if max(c0[0], low[t, 0]) != i or max(c0[1], low[t, 1]) != j or max(c0[2], low[t, 2]) != l:
+                    if max(c00, low[t, 0]) != i or max(c01, low[t, 1]) != j or max(c02, low[t, 2]) != l:
                         continue
                     if not (q_lo[q, 0] <= t_hi[t, 0] and t_lo[t, 0] <= q_hi[q, 0] and q_lo[q, 1] <= t_hi[t, 1]
                             and t_lo[t, 1] <= q_hi[q, 1] and q_lo[q, 2] <= t_hi[t, 2] and t_lo[t, 2] <= q_hi[q, 2]):
@@ -192,8 +191,10 @@ def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
     ptr, items, low = cell_table(t_lo, t_hi, origin, cell, shape)
     nq = len(q_lo)
     bounds = np.zeros(nq + 1, dtype=np.int64)
+    for q in prange(nq):
+        bounds[q + 1] = query_bound(q, q_lo, q_hi, origin, cell, shape, ptr)
     for q in range(nq):
-        bounds[q + 1] = bounds[q] + query_bound(q, q_lo, q_hi, origin, cell, shape, ptr)
+        bounds[q + 1] += bounds[q]
     found = np.zeros(nq + 1, dtype=np.int64)
     targets = np.empty(bounds[nq], dtype=np.int64)
     blocks = (nq + QUERY_BLOCK - 1) // QUERY_BLOCK
