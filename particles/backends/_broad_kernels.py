@@ -83,8 +83,9 @@ def cell_of(x, origin, cell, shape, a):
 
 
 @_jit()
-def cell_table(t_lo, t_hi, origin, cell, shape):
-    """Targets per cell in compressed rows: ``ptr`` (cells + 1), ``items``; and each target's lowest cell (k, 3)."""
+def cell_table(t_lo, t_hi, origin, cell, shape, keep):
+    """The targets where `keep` is True per cell in compressed rows: ``ptr`` (cells + 1), ``items``; and each
+    target's lowest cell (k, 3), of every target."""
     cells = shape[0] * shape[1] * shape[2]
     low = np.empty((len(t_lo), 3), dtype=np.int64)
     high = np.empty((len(t_lo), 3), dtype=np.int64)
@@ -93,6 +94,8 @@ def cell_table(t_lo, t_hi, origin, cell, shape):
         for a in range(3):
             low[k, a] = cell_of(t_lo[k, a], origin, cell, shape, a)
             high[k, a] = cell_of(t_hi[k, a], origin, cell, shape, a)
+        if not keep[k]:
+            continue
         for i in range(low[k, 0], high[k, 0] + 1):
             for j in range(low[k, 1], high[k, 1] + 1):
                 for l in range(low[k, 2], high[k, 2] + 1):
@@ -102,6 +105,8 @@ def cell_table(t_lo, t_hi, origin, cell, shape):
     fill = ptr[:-1].copy()
     items = np.empty(ptr[cells], dtype=np.int64)
     for k in range(len(t_lo)):  # in increasing target: each cell's list is sorted
+        if not keep[k]:
+            continue
         for i in range(low[k, 0], high[k, 0] + 1):
             for j in range(low[k, 1], high[k, 1] + 1):
                 for l in range(low[k, 2], high[k, 2] + 1):
@@ -122,17 +127,24 @@ def shares_vertex(A, ia, B, ib):
 
 
 @_jit()
-def query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, low, Q, T, same, mask, masked, out, start):
+def holds_masked(A, ia, mask):
+    """Whether row ``A[ia]`` of an index table holds a vertex of `mask`."""
+    for p in range(A.shape[1]):
+        if mask[A[ia, p]]:
+            return True
+    return False
+
+
+@_jit()
+def query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, low, Q, T, same, mask, masked, q_in, out,
+          start):
     """The targets whose boxes overlap query `q`'s and share no vertex with it, into ``out[start:]``; their count.
 
     With `same` (queries and targets are one set), only targets above `q`; with `masked`, only pairs with
-    a vertex in `mask`. Written in the order they are met (sorted by the caller).
+    a vertex in `mask` (`q_in`: whether the query holds one; when it does not, the caller passes the table
+    of the targets that do). Written in the order they are met (sorted by the caller).
     """
     found = 0
-    q_in = False
-    if masked:
-        for p in range(Q.shape[1]):
-            q_in = q_in or mask[Q[q, p]]
     # the cells the box covers, c0 to c1 along each axis (scalars: no array per query)
     c00, c10 = cell_of(q_lo[q, 0], origin, cell, shape, 0), cell_of(q_hi[q, 0], origin, cell, shape, 0)
     c01, c11 = cell_of(q_lo[q, 1], origin, cell, shape, 1), cell_of(q_hi[q, 1], origin, cell, shape, 1)
@@ -153,12 +165,8 @@ def query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, low, Q, T,
                         continue
                     if shares_vertex(Q, q, T, t):
                         continue
-                    if masked and not q_in:
-                        t_in = False
-                        for p in range(T.shape[1]):
-                            t_in = t_in or mask[T[t, p]]
-                        if not t_in:
-                            continue
+                    if masked and not q_in and not holds_masked(T, t, mask):
+                        continue
                     out[start + found] = t
                     found += 1
     return found
@@ -185,14 +193,25 @@ def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
     Parameters: the boxes ``(lo, hi)`` of the queries and the targets (shape (k, 3)), their vertices `Q`
     and `T` (index tables), `same` (one set: pairs ``q < t``), and a vertex `mask` used when `masked`.
     Each query writes into its own slice of a buffer sized by :func:`query_bound` (one pass of tests),
-    sorts it, and the slices are joined in query order.
+    sorts it, and the slices are joined in query order. With `masked`, a query that holds no masked
+    vertex walks a second table, of the targets that hold one (the continuous test's searches after
+    the first, where a few vertices still move, walk a few boxes instead of all).
     """
     origin, cell, shape = grid_shape(q_lo, q_hi, t_lo, t_hi)
-    ptr, items, low = cell_table(t_lo, t_hi, origin, cell, shape)
+    ptr, items, low = cell_table(t_lo, t_hi, origin, cell, shape, np.ones(len(t_lo), dtype=np.bool_))
     nq = len(q_lo)
+    q_in = np.zeros(nq, dtype=np.bool_)
+    ptr_in, items_in = ptr, items  # with a mask: the table of the targets that hold a masked vertex
+    if masked:
+        t_in = np.empty(len(t_lo), dtype=np.bool_)
+        for t in range(len(t_lo)):
+            t_in[t] = holds_masked(T, t, mask)
+        for q in range(nq):
+            q_in[q] = holds_masked(Q, q, mask)
+        ptr_in, items_in, _ = cell_table(t_lo, t_hi, origin, cell, shape, t_in)
     bounds = np.zeros(nq + 1, dtype=np.int64)
-    for q in prange(nq):
-        bounds[q + 1] = query_bound(q, q_lo, q_hi, origin, cell, shape, ptr)
+    for q in prange(nq):  # a query outside the mask walks the masked targets' table only
+        bounds[q + 1] = query_bound(q, q_lo, q_hi, origin, cell, shape, ptr if q_in[q] or not masked else ptr_in)
     for q in range(nq):
         bounds[q + 1] += bounds[q]
     found = np.zeros(nq + 1, dtype=np.int64)
@@ -201,8 +220,9 @@ def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
     for b in prange(blocks):  # each block of queries alone, each query into its own slice
         for q in range(b * QUERY_BLOCK, min(nq, (b + 1) * QUERY_BLOCK)):
             s = bounds[q]
-            f = query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, low, Q, T, same, mask, masked,
-                      targets, s)
+            whole = q_in[q] or not masked
+            f = query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr if whole else ptr_in,
+                      items if whole else items_in, low, Q, T, same, mask, masked, q_in[q], targets, s)
             targets[s:s + f].sort()
             found[q + 1] = f
     for q in range(nq):
