@@ -40,12 +40,14 @@ def test_candidates_are_the_numpy_sets(seed):
         np.testing.assert_array_equal(a, b)
 
 
-def test_masked_candidates_are_the_numpy_sets():
+@pytest.mark.parametrize("n, count", [(N, 20), (24, 1), (24, 300)],
+                         ids=["12^2, 20 masked", "24^2 (the queries in parallel), 1 masked", "24^2, 300 masked"])
+def test_masked_candidates_are_the_numpy_sets(n, count):
     """With a vertex mask, the pairs holding one of those vertices, as candidates_touching finds them."""
-    mesh, x, dx = crumpled(3)
+    mesh, x, dx = crumpled(3, n=n)
     lo, hi = np.minimum(x, x + dx), np.maximum(x, x + dx)
     mask = np.zeros(mesh.n, dtype=bool)
-    mask[np.random.default_rng(3).choice(mesh.n, 20, replace=False)] = True
+    mask[np.random.default_rng(3).choice(mesh.n, count, replace=False)] = True
     ref = candidates_touching(mesh, lo, hi, 0.02, mask)
     got = cloth.cloth_candidates(mesh, lo, hi, 0.02, mask)
     assert len(ref[0]) > 0
