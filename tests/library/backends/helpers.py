@@ -1,4 +1,4 @@
-"""Helpers of the backend tests: the numba marker and the agreement to a relative tolerance."""
+"""Helpers of the backend tests: the numba marker, the agreement to a relative tolerance, a shaken system."""
 
 import numpy as np
 import pytest
@@ -43,3 +43,14 @@ def assert_same_bits(results):
     for runs in zip(*results):  # a loop over the quantities: each the same in every run
         for other in runs[1:]:
             np.testing.assert_array_equal(other, runs[0])
+
+
+def shaken(system, seed=0):
+    """`system` with its free particles moved off rest and moving (pinned ones stay at rest)."""
+    X = system.state()
+    rng = np.random.default_rng(seed)
+    free = np.setdiff1d(np.arange(system.n), system.pinned)
+    X[free, 0] += rng.normal(scale=0.01, size=(len(free), system.d))
+    X[free, 1] = rng.normal(scale=0.1, size=(len(free), system.d))
+    system.set_state(X, 0.0)
+    return system

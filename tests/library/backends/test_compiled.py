@@ -30,22 +30,12 @@ from particles.springs import Bending, Springs
 from particles.xpbd import XPBD, distance_pass
 
 from .helpers import _close, assert_same_bits, needs_numba, on_thread_counts
+from .helpers import shaken as _shaken
 
 pytestmark = pytest.mark.skipif("numba" not in backends.available(),
                                 reason="numba is not installed (pip install 'particles[fast]')")
 
 H = 1e-4  # s
-
-
-def _shaken(system, seed=0):
-    """`system` with its free particles moved off rest and moving (pinned ones stay at rest)."""
-    X = system.state()
-    rng = np.random.default_rng(seed)
-    free = np.setdiff1d(np.arange(system.n), system.pinned)
-    X[free, 0] += rng.normal(scale=0.01, size=(len(free), system.d))
-    X[free, 1] = rng.normal(scale=0.1, size=(len(free), system.d))
-    system.set_state(X, 0.0)
-    return system
 
 
 def _systems():

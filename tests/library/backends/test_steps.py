@@ -21,21 +21,11 @@ from particles.integrators import step_times, symplectic_euler
 from particles.massspring import cloth, hair, string
 
 from .helpers import _close, assert_same_bits, needs_numba, on_thread_counts
+from .helpers import shaken as _shaken
 
 pytestmark = needs_numba
 
 H = 1e-4  # s
-
-
-def _shaken(system, seed=0):
-    """`system` with its free particles moved off rest and moving."""
-    X = system.state()
-    rng = np.random.default_rng(seed)
-    free = np.setdiff1d(np.arange(system.n), system.pinned)
-    X[free, 0] += rng.normal(scale=0.01, size=(len(free), system.d))
-    X[free, 1] = rng.normal(scale=0.1, size=(len(free), system.d))
-    system.set_state(X, 0.0)
-    return system
 
 
 def _gusty():
