@@ -29,7 +29,6 @@ import subprocess
 import sys
 import time
 
-import numpy as np
 
 CONFIGURATIONS = {  # name: the environment of the process
     "workqueue": {"NUMBA_THREADING_LAYER": "workqueue"},
@@ -116,5 +115,4 @@ def main():
 
 
 if __name__ == "__main__":
-    np.seterr(all="ignore")
     main()

@@ -55,11 +55,12 @@ parallel then a per-particle gather, which moves more memory and is used
 from four threads on. Unless ``NUMBA_THREADING_LAYER`` says otherwise, the
 threads are GNU OpenMP's (numba's work queue where OpenMP does not load),
 with their wait between two parallel loops bounded by ``GOMP_SPINCOUNT=10000``
-(``bench/bench_threads.py``): the work queue took 35 us to start a parallel
-loop and woke its second thread too late to halve a 0.2 ms loop, OpenMP
-starts one in 5 us and halves it; OpenMP's default wait, a spin of
-milliseconds, made an XPBD substep (a parallel loop per colour) a hundred
-times slower beside another process doing the same on a 2-core machine.
+(``bench/bench_threads.py``): the work queue took 17 to 38 us to start a
+parallel loop and woke its second thread too late to halve a 0.2 ms loop,
+OpenMP starts one in 2 to 7 us and halves it; OpenMP's default wait, a spin
+of milliseconds, once made an XPBD substep (a parallel loop per colour) a
+hundred times slower beside another process doing the same on a 2-core
+machine.
 GNU OpenMP is not fork-safe: a process forked (not spawned) from one that
 ran a parallel loop must not run one itself (numba stops it with
 "Terminating: fork() called from a process already using GNU OpenMP");

@@ -136,13 +136,12 @@ def holds_masked(A, ia, mask):
 
 
 @_jit()
-def query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, low, Q, T, same, mask, masked, q_in, out,
-          start):
-    """The targets whose boxes overlap query `q`'s and share no vertex with it, into ``out[start:]``; their count.
+def query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, low, Q, T, same, out, start):
+    """The targets of the table ``ptr, items`` whose boxes overlap query `q`'s and share no vertex with it, into
+    ``out[start:]``; their count.
 
-    With `same` (queries and targets are one set), only targets above `q`; with `masked`, only pairs with
-    a vertex in `mask` (`q_in`: whether the query holds one; when it does not, the caller passes the table
-    of the targets that do). Written in the order they are met (sorted by the caller).
+    With `same` (queries and targets are one set), only targets above `q`. Written in the order they are met
+    (sorted by the caller).
     """
     found = 0
     # the cells the box covers, c0 to c1 along each axis (scalars: no array per query)
@@ -164,8 +163,6 @@ def query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, low, Q, T,
                             and t_lo[t, 1] <= q_hi[q, 1] and q_lo[q, 2] <= t_hi[t, 2] and t_lo[t, 2] <= q_hi[q, 2]):
                         continue
                     if shares_vertex(Q, q, T, t):
-                        continue
-                    if masked and not q_in and not holds_masked(T, t, mask):
                         continue
                     out[start + found] = t
                     found += 1
@@ -222,7 +219,7 @@ def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
             s = bounds[q]
             whole = q_in[q] or not masked
             f = query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr if whole else ptr_in,
-                      items if whole else items_in, low, Q, T, same, mask, masked, q_in[q], targets, s)
+                      items if whole else items_in, low, Q, T, same, targets, s)
             targets[s:s + f].sort()
             found[q + 1] = f
     for q in range(nq):

@@ -23,13 +23,12 @@ except ImportError:  # without the extra: importable (a walk over the package), 
     numba, prange = None, range
 
 # numba's threads, unless the user chose a layer: GNU OpenMP where it loads, else numba's own work queue. On
-# the 2-core VMs this was measured on (bench/bench_threads.py), the work queue wakes its sleeping threads so
-# slowly that a parallel loop of 0.2 ms ran no faster on two threads than on one, and every parallel loop
-# cost 35 us to start; OpenMP's threads start in 5 us and halve such a loop. Its idle threads wait for the
-# next loop by spinning, which on a machine shared with other processes takes their cores: by default for
-# milliseconds (an XPBD step, one parallel loop per colour, ran 100 times slower beside another such
-# process); GOMP_SPINCOUNT bounds the spin to a fraction of a millisecond, which keeps the back-to-back loops
-# of a step fast and costs a competing process no more than the work queue did.
+# the 2-core VM this was measured on (bench/bench_threads.py), the work queue took 17 to 38 us to start a
+# parallel loop and woke its second thread so late that a loop of 0.2 ms ran 0.96x to 1.46x as fast on two
+# threads as on one; OpenMP starts one in 2 to 7 us and halves such a loop. Its idle threads wait for the next loop by
+# spinning, by default for milliseconds, which on a machine shared with other processes takes their cores
+# (in one of our runs an XPBD substep, a parallel loop per colour, took 179 ms instead of 1.8 beside a second
+# such process); GOMP_SPINCOUNT bounds the spin, which keeps the back-to-back loops of a step fast.
 if numba is not None and "NUMBA_THREADING_LAYER" not in os.environ:
     os.environ["NUMBA_THREADING_LAYER"] = "default"
     os.environ.setdefault("NUMBA_THREADING_LAYER_PRIORITY", "omp workqueue tbb")  # tbb: not a dependency
@@ -57,7 +56,7 @@ if numba is not None and "NUMBA_CACHE_DIR" not in os.environ and _cache_folder()
 
 
 # loops shorter than this run on one thread: starting the threads would cost more than they save (OpenMP starts
-# a parallel loop in about 5 us; 4096 springs or constraint rows take 25-40 us on one thread)
+# a parallel loop in 2 to 7 us; 4096 springs or constraint rows take 25-40 us on one thread)
 PARALLEL_MIN = 4096
 
 

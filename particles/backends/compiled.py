@@ -17,7 +17,7 @@ from ._kernels import incidence, parallel, pick, rank_blocks, spring_forces, spr
 from ._kernels import lennard_jones as lennard_jones_pairs
 from ._kernels import nbody as nbody_sums
 from ._pbd_kernels import distance_group, distance_jacobi
-from ._step_kernels import clamp_forces, symplectic_euler_steps
+from ._step_kernels import GUST, PER_MASS, PHASE, WAVELENGTH, clamp_forces, symplectic_euler_steps
 from .cloth import cloth_candidates, cloth_closest, cloth_first_contacts, cloth_incidence
 from .cloth import cloth_jacobi, cloth_proximity
 from .fixes import collide, provot
@@ -478,6 +478,8 @@ def _wind_table(winds, ts, d):
         norm = np.linalg.norm(s)
         W[:, q, :d] = s
         W[:, q, d:2 * d] = s / norm if norm > 0 else 0.0
-        W[:, q, 2 * d:] = wind.gust, 0.0, wind.wavelength, float(wind.per_mass)
-        W[:, q, 2 * d + 1] = ts / wind.period
+        W[:, q, 2 * d + GUST] = wind.gust
+        W[:, q, 2 * d + PHASE] = ts / wind.period
+        W[:, q, 2 * d + WAVELENGTH] = wind.wavelength
+        W[:, q, 2 * d + PER_MASS] = float(wind.per_mass)
     return W

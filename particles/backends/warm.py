@@ -1,7 +1,7 @@
 """Compile the kernels ahead of use: every compiled path of the library once, on small systems.
 
 numba compiles a kernel the first time it is called with new argument types
-(seconds per kernel, about a minute and a half for all of them) and keeps
+(seconds per kernel, 103 s for all of them in one process on the 2-core machine) and keeps
 the machine code in its disk cache (:mod:`particles.backends`). Without a
 warm cache, each new process pays again, and processes started at the same
 time (two test workers, a class's notebooks opened at once) each compile the

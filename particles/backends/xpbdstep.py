@@ -178,7 +178,7 @@ class CompiledSubstep:
         self._coefficients(hs)
         given = a is not None
         a = np.ascontiguousarray(a, dtype=np.float64) if given else np.zeros((self.d, 1))
-        # each colour group is a parallel loop of its own, and starting the threads costs about 5 microseconds
+        # each colour group is a parallel loop of its own, and starting the threads costs 2 to 7 microseconds
         # (bench/bench_threads.py): threads only when the groups are long (pick's threshold on the mean group)
         kernel = pick(substep_kernel, (len(self.ij) + len(self.idx)) // max(1, len(self.segments)))
         kernel(x, v, a, given, terms, self.m, self.free, float(hs), int(iterations), self.formulation == "xpbd",
