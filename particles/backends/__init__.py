@@ -120,8 +120,8 @@ Modules
 * :mod:`particles.backends.cloth`: the cloth collision pipeline's broad phase, proximity impulses and
   continuous test, compiled (the same contacts and verdicts as NumPy);
 * ``_kernels.py``, ``_step_kernels.py``, ``_pbd_kernels.py``, ``_provot_kernels.py``,
-  ``_collider_kernels.py``, ``_factored_kernels.py``, ``_broad_kernels.py``, ``_contact_kernels.py``: the
-  numba loops they call (private to the package).
+  ``_collider_kernels.py``, ``_factored_kernels.py``, ``_broad_kernels.py``, ``_contact_kernels.py``,
+  ``_jacobi_kernels.py``: the numba loops they call (private to the package).
 
 Examples
 --------

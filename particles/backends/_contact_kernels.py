@@ -1,15 +1,14 @@
-"""Cloth contacts, compiled (numba): closest points, proximity tests, the coplanarity cubic, Jacobi impulses.
+"""Cloth contacts, compiled (numba): closest points, proximity tests, the coplanarity cubic.
 
 Imported only by :mod:`particles.backends.cloth`. Each candidate pair is one
 loop iteration, with the arithmetic of the NumPy reference in its order
 (:mod:`particles.collisions.proximity`: Ericson's closest points;
 :mod:`particles.collisions.ccd`: the cubic, its Bernstein test, the monotone
 pieces between the roots of its derivative, bisection, the closest points at
-each root; :mod:`particles.collisions.pipeline`: the proximity tests and the
-Jacobi impulses). Points are 3-tuples in registers. Pairs are independent and
-per-vertex sums go through a compressed-row incidence list in the order
-``np.bincount`` adds them, so the results have the same bits on any number of
-threads.
+each root; :mod:`particles.collisions.pipeline`: the proximity tests). Points
+are 3-tuples in registers. Pairs are independent, so the results have the same
+bits on any number of threads. The Jacobi impulses are in
+:mod:`particles.backends._jacobi_kernels`.
 """
 
 import math
@@ -326,60 +325,3 @@ def first_contact_pairs(x0, dx, rows, edge, eta, f_tol, bisections, parallel_tol
             normal[k, a_] = n[a_]
         for j in range(4):
             weights[k, j] = W[j]
-
-
-@_jit(parallel=True)
-def jacobi_iteration(vbar, V, W, N, S, target, w, ptr, col, h, tol, friction, active, impulse, load):
-    """One Jacobi iteration of ``ClothCollisions._proximity`` (active contacts, loads, impulses, scatter)."""
-    K, n = len(V), len(vbar)
-    for k in prange(K):  # the contacts below their target
-        Wk = (W[k, 0], W[k, 1], W[k, 2], W[k, 3])
-        vN = dot3(row3(N, k), combine(Wk, vbar, V, k))
-        active[k] = (target[k] - vN) * h > tol
-    count = 0
-    for k in range(K):
-        count += active[k]
-    if count == 0:
-        return 0
-    for p in prange(n):  # each free vertex's load: sum of |w_j| over its active contacts, bincount's order
-        s = 0.0
-        if w[p] > 0:
-            for e in range(ptr[p], ptr[p + 1]):
-                if active[col[e] // 4]:
-                    s += abs(W[col[e] // 4, col[e] % 4])
-        load[p] = s
-    for k in prange(K):
-        if not active[k]:
-            continue
-        c = 0.0
-        for j in range(4):
-            if w[V[k, j]] > 0 and abs(W[k, j]) > 0:
-                c = max(c, load[V[k, j]])
-        c = max(c, 1.0)
-        Wk = (W[k, 0], W[k, 1], W[k, 2], W[k, 3])
-        rel = combine(Wk, vbar, V, k)
-        Nk = row3(N, k)
-        vN = dot3(Nk, rel)
-        I = (target[k] - vN) / S[k] / c
-        for a in range(3):
-            impulse[k, a] = I * Nk[a]
-        if friction > 0:
-            vt = (rel[0] - vN * Nk[0], rel[1] - vN * Nk[1], rel[2] - vN * Nk[2])
-            speed = math.sqrt(dot3(vt, vt))
-            J = min(friction * I, speed / S[k] / c)
-            f = J / speed if speed > 0 else 0.0
-            for a in range(3):
-                impulse[k, a] -= f * vt[a]
-    for p in prange(n):  # vbar_j += w_j I n / m_j, summed per vertex in bincount's order
-        s0 = s1 = s2 = 0.0
-        for e in range(ptr[p], ptr[p + 1]):
-            k, j = col[e] // 4, col[e] % 4
-            if active[k]:
-                scale = W[k, j] * w[p]
-                s0 += scale * impulse[k, 0]
-                s1 += scale * impulse[k, 1]
-                s2 += scale * impulse[k, 2]
-        vbar[p, 0] += s0
-        vbar[p, 1] += s1
-        vbar[p, 2] += s2
-    return count

@@ -13,7 +13,8 @@ numba. Each returns what the NumPy stage it replaces returns:
 * :func:`cloth_closest`, :func:`cloth_first_contacts`: the closest points
   of :mod:`particles.collisions.proximity` and the continuous test of
   :mod:`particles.collisions.ccd`, pair by pair (:mod:`particles.backends._contact_kernels`);
-* :func:`cloth_jacobi`: one Jacobi iteration of the proximity impulses.
+* :func:`cloth_impulses`: the Jacobi iterations of the proximity impulses, with the bodies' vertex pass
+  after each when the bodies are primitives at rest (:mod:`particles.backends._jacobi_kernels`).
 
 Nothing here imports :mod:`particles.collisions` (the pipeline passes its
 constants), so that no import circle closes through this module. Importing it
@@ -23,11 +24,12 @@ imports numba.
 import numpy as np
 
 from ._broad_kernels import box_candidates, corner_bounds
-from ._contact_kernels import closest_pairs, first_contact_pairs, jacobi_iteration, proximity_rows
-from ._kernels import incidence, pick
+from ._contact_kernels import closest_pairs, first_contact_pairs, proximity_rows
+from ._jacobi_kernels import proximity_impulses
+from ._kernels import pick
 
 __all__ = ["cloth_candidates", "cloth_closest", "cloth_proximity", "cloth_first_contacts",
-           "cloth_incidence", "cloth_jacobi"]
+           "cloth_impulses"]
 
 _EMPTY_MASK = np.zeros(0, dtype=np.bool_)
 
@@ -116,17 +118,52 @@ def cloth_first_contacts(x0, dx, rows, edge, eta, ftol, bisections, parallel_tol
     return rows[hit], weights[hit], normal[hit], time[hit]
 
 
-def cloth_incidence(V, n):
-    """The contacts of each vertex, as ``np.bincount`` over ``V.ravel()`` meets them: ``ptr`` (n + 1), ``col``."""
-    return incidence(np.ascontiguousarray(V).ravel(), n, 1, False)
+_NO_BODIES = (np.zeros(0, dtype=np.int64), np.zeros((0, 13)))
 
 
-def cloth_jacobi(vbar, V, W, N, S, target, w, ptr, col, h, tol, friction, active, impulse, load):
-    """One Jacobi iteration of the proximity impulses on `vbar` (n, 3), in place; returns the active count.
+def cloth_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterations, thickness, bodies=None):
+    """Jacobi iterations of the proximity impulses on `vbar` (n, 3), in place: ``ClothCollisions._proximity``.
 
-    The arithmetic of ``ClothCollisions._active`` and ``_impulses`` with ``np.bincount``'s sums per vertex
-    (in the order of `col`). `active` (k,) is set to the contacts that got an impulse; `impulse` (k, 3)
-    and `load` (n,) are work arrays.
+    Parameters
+    ----------
+    vbar : ndarray, shape (n, 3)
+        The step's average velocities, in m/s (changed in place).
+    x0 : ndarray, shape (n, 3)
+        Positions at the start of the step, in metres.
+    V, W, N, S, target : ndarray
+        The contacts: vertices (k, 4), weights (k, 4), unit normals (k, 3), ``sum_j W_j^2 w_j`` (k,) and
+        target normal velocities (k,), in m/s.
+    w : ndarray, shape (n,)
+        Inverse masses, in 1/kg (0 for pinned vertices).
+    h : float
+        Step, in seconds.
+    tol : float
+        A contact is active while its normal velocity is more than ``tol / h`` below its target (metres).
+    friction : float
+        Coulomb coefficient.
+    iterations : int
+        Most iterations; fewer when one finds no active contact.
+    thickness : float
+        Distance kept from the bodies, in metres.
+    bodies : tuple (kinds, rows), optional
+        Bodies at rest as :func:`particles.backends.fixes.surface_rows` gives them: after each iteration
+        the free vertices of its active contacts are moved out of them.
+
+    Returns
+    -------
+    done : int
+        Iterations that gave impulses.
+    touched : ndarray of bool, shape (k,)
+        The contacts that got an impulse.
+    active : ndarray of bool, shape (k,)
+        Those of the last iteration.
     """
-    return pick(jacobi_iteration, max(len(V), len(vbar)))(vbar, V, W, N, S, target, w, ptr, col, float(h), tol,
-                                                        friction, active, impulse, load)
+    k, n = len(V), len(vbar)
+    kinds, rows = _NO_BODIES if bodies is None else bodies
+    touched, active = np.zeros(k, dtype=np.bool_), np.zeros(k, dtype=np.bool_)
+    order, impulse = np.empty(k, dtype=np.int64), np.empty((k, 3))
+    load, ptr, entry = np.empty(n), np.empty(n + 1, dtype=np.int64), np.empty(4 * k, dtype=np.int64)
+    done = pick(proximity_impulses, max(k, n))(vbar, np.ascontiguousarray(x0), V, W, N, S, target, w, float(h),
+                                                 float(tol), float(friction), int(iterations), float(thickness),
+                                                 kinds, rows, touched, active, order, impulse, load, ptr, entry)
+    return done, touched, active

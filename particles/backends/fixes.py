@@ -18,7 +18,7 @@ from ._collider_kernels import BOX, CYLINDER, PLANE, SPHERE, collider_candidates
 from ._kernels import incidence, pick
 from ._provot_kernels import largest, provot_average, provot_end, provot_group, provot_start, provot_strains
 
-__all__ = ["provot", "surface_row", "collide"]
+__all__ = ["provot", "surface_row", "surface_rows", "collide"]
 
 STRAIN_BLOCKS = 64  # blocks of springs whose largest strains are taken in parallel (a maximum: any order)
 
@@ -120,6 +120,20 @@ def surface_row(surface):
         return CYLINDER, np.array(list(surface.point) + list(surface.axis) + [surface.radius, surface.sign]
                                   + list(across))
     return None
+
+
+def surface_rows(surfaces):
+    """The surfaces as :func:`surface_row` gives them, in one table: ``kinds`` (b,) and ``rows`` (b, 13); or None.
+
+    None when one of them is not a primitive. Rows are padded with zeros to the longest (a box's 13).
+    """
+    table = [surface_row(s) for s in surfaces]
+    if any(r is None for r in table):
+        return None
+    rows = np.zeros((len(table), 13))
+    for b, (_, P) in enumerate(table):  # a loop over the few surfaces
+        rows[b, :len(P)] = P
+    return np.array([kind for kind, _ in table], dtype=np.int64), rows
 
 
 def collide(collider, X_old, X, t, h, m, free):

@@ -20,6 +20,8 @@ the continuous test and the broad phase (``from particles.collisions import Coll
 * :mod:`particles.collisions.candidates`: the broad phase: pairs whose swept boxes overlap, kept from step to
   step (:class:`CandidateCache`);
 * :mod:`particles.collisions.bodies`: the cloth against moving bodies (stage 1 of the pipeline);
+* :mod:`particles.collisions.proximity_impulses`: impulses between pieces of the cloth closer than its
+  thickness (stage 2 of the pipeline);
 * :mod:`particles.collisions.zones`: impact zones, moved rigidly (stage 4 of the pipeline);
 * :mod:`particles.collisions.pipeline`: :class:`ClothCollisions`, the Bridson-Fedkiw-Anderson stages applied
   after each step;

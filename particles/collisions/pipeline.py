@@ -118,7 +118,8 @@ from .bodies import BodyStage, StaticBody
 from .candidates import CandidateCache, candidate_pairs
 from .ccd import Impacts, detect_pairs
 from .mesh import TriangleMesh
-from .proximity import PARALLEL, dot, edge_edge_kernel, vertex_face_kernel
+from .proximity import dot, edge_edge_kernel, vertex_face_kernel
+from .proximity_impulses import ProximityStage
 from .surfaces import Surface
 from .zones import ImpactZoneStage
 
@@ -165,7 +166,7 @@ class ClothCollisionResult:
     converged: bool = True
 
 
-class ClothCollisions(BodyStage, ImpactZoneStage):
+class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
     """Collisions of a cloth mesh with itself and with bodies, applied after each step.
 
     Parameters
@@ -338,114 +339,6 @@ class ClothCollisions(BodyStage, ImpactZoneStage):
     def _effective(self, vertices, weights):
         """``sum_j w_j^2 / m_j``: the inverse of the pair's effective mass along a direction."""
         return np.einsum("kj,kj->k", weights ** 2, self.w[vertices])
-
-    # --------------------------------------------------------- stage 2: proximity
-    def _rest_far(self, vertices, edge):
-        """Pairs farther apart than rest_distance in the rest shape (the others never repel)."""
-        if self.x_rest is None or not len(vertices):
-            return np.ones(len(vertices), dtype=bool)
-        p = self.x_rest[vertices]
-        close = (edge_edge_kernel if edge else vertex_face_kernel)(p[:, 0], p[:, 1], p[:, 2], p[:, 3])
-        return close.distance >= self.rest_distance
-
-    def _proximity_contacts(self, x0, vbar, h):
-        """Pairs within thickness at x0 or ending within it: vertices, weights, normals, distances."""
-        vf, ee = self.candidates.pairs(x0, h * vbar, self.thickness)
-        fast = kernels_for(self.backend, self.n)
-        parts = []
-        for idx, edge in ((vf, False), (ee, True)):  # the two kinds of pairs
-            if not len(idx):
-                continue
-            if fast is not None:  # the same tests pair by pair, compiled
-                parts.append(fast.cloth_proximity(x0, vbar, self.w, self.x_rest, idx, edge, h, self.thickness,
-                                                  self.rest_distance, PARALLEL))
-                continue
-            p = x0[idx]
-            close = (edge_edge_kernel if edge else vertex_face_kernel)(p[:, 0], p[:, 1], p[:, 2], p[:, 3])
-            vN = dot(close.normal, self._relative(vbar, idx, close.weights))
-            keep = (close.distance < self.thickness) | (close.distance + h * vN < self.thickness)
-            keep &= self._effective(idx, close.weights) > 0
-            if edge:  # edges whose closest points are ends: that contact is a vertex's, found with the faces
-                s_, u_ = close.weights[:, 1], -close.weights[:, 3]
-                keep &= (s_ > 1e-9) & (s_ < 1 - 1e-9) & (u_ > 1e-9) & (u_ < 1 - 1e-9)
-            rows = np.flatnonzero(keep)
-            rows = rows[self._rest_far(idx[rows], edge)]
-            parts.append((idx[rows], close.weights[rows], close.normal[rows], close.distance[rows]))
-        if not parts:
-            return None
-        return tuple(np.concatenate([p[k] for p in parts]) for k in range(4))
-
-    def _proximity(self, contacts, x0, vbar, t, h):
-        """Iterations of proximity impulses with friction, each followed by the bodies' vertex pass.
-
-        Gauss-Seidel: one vertex-disjoint colour group of contacts at a time,
-        each seeing the impulses of the groups before it; Jacobi: all at once,
-        each impulse divided by the largest number of active contacts at its
-        free vertices. Returns how many pairs got an impulse.
-        """
-        if contacts is None or not len(contacts[0]):
-            return 0
-        V, W, N, D = contacts
-        S = self._effective(V, W)
-        inside = D < self.thickness
-        target = np.where(inside, self.repulsion * (self.thickness - D), self.thickness - D) / h
-        touched = np.zeros(len(V), dtype=bool)
-        free = self.w[V] > 0
-        groups = color_constraints(V, self.n) if self.method == "gauss-seidel" else None
-        fast = kernels_for(self.backend, self.n) if groups is None else None
-        if fast is not None:
-            ptr, col = fast.cloth_incidence(V, self.n)
-            active, impulse, load = np.empty(len(V), dtype=bool), np.empty((len(V), 3)), np.empty(self.n)
-        for _ in range(self.iterations):  # a loop over iterations
-            if fast is not None:  # compiled: the same iteration, summed per vertex in bincount's order
-                fast.cloth_jacobi(vbar, V, W, N, S, target, self.w, ptr, col, h, self.tol * self.thickness,
-                                  self.friction, active, impulse, load)
-                k = np.flatnonzero(active)
-            elif groups is None:
-                k = self._active(vbar, V, W, N, target, h)
-                if len(k):
-                    share = np.where(free[k], np.abs(W[k]), 0.0)  # each free vertex's part in each contact
-                    load = np.bincount(V[k].ravel(), share.ravel(), minlength=self.n)
-                    c = np.maximum(np.max(np.where(share > 0, load[V[k]], 0.0), axis=1), 1.0)
-                    self._impulses(vbar, V[k], W[k], N[k], S[k], target[k], c, disjoint=False)
-            else:
-                k = []
-                for g in groups:  # Gauss-Seidel: one colour at a time
-                    kg = g[self._active(vbar, V[g], W[g], N[g], target[g], h)]
-                    if len(kg):
-                        self._impulses(vbar, V[kg], W[kg], N[kg], S[kg], target[kg], 1.0, disjoint=True)
-                        k.append(kg)
-                k = np.concatenate(k) if k else []
-            if not len(k):
-                break
-            touched[k] = True
-            if self.bodies:
-                moved = np.zeros(self.n, dtype=bool)
-                moved[V[k].ravel()] = True
-                self._bodies(x0, vbar, t, h, edges=False, subset=moved)
-        return int(touched.sum())
-
-    def _active(self, vbar, V, W, N, target, h):
-        """Rows of the contacts whose relative normal velocity is below their target."""
-        vN = dot(N, self._relative(vbar, V, W))
-        dvN = target - vN
-        return np.flatnonzero(dvN * h > self.tol * self.thickness)
-
-    def _impulses(self, vbar, V, W, N, S, target, c, disjoint):
-        """Normal impulses to the target normal velocity, divided by `c`, with Coulomb friction."""
-        rel = self._relative(vbar, V, W)
-        vN = dot(N, rel)
-        I = (target - vN) / S / c  # normal impulse, N s
-        impulse = I[:, None] * N
-        if self.friction > 0:
-            vt = rel - vN[:, None] * N
-            speed = np.sqrt(dot(vt, vt))
-            J = np.minimum(self.friction * I, speed / S / c)
-            impulse -= np.divide(J, speed, out=np.zeros_like(speed), where=speed > 0)[:, None] * vt
-        if disjoint:  # no vertex twice: a plain indexed add
-            vbar[V] += (W * self.w[V])[:, :, None] * impulse[:, None, :]
-        else:
-            self._scatter(vbar, V, W, impulse)
 
     # ------------------------------------------------------ stage 3: continuous
     def _drop_fixed(self, impacts):

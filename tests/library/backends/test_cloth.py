@@ -6,7 +6,7 @@ import pytest
 numba = pytest.importorskip("numba")
 
 from particles.backends import cloth  # noqa: E402
-from particles.collisions import ClothCollisions, Plane, TriangleMesh, intersections  # noqa: E402
+from particles.collisions import ClothCollisions, MovingSurface, Plane, Sphere, TriangleMesh, intersections  # noqa: E402
 from particles.collisions.candidates import candidates_in_boxes, candidates_touching  # noqa: E402
 from particles.collisions.ccd import BISECTIONS, F_TOL, first_contacts  # noqa: E402
 from particles.collisions.proximity import PARALLEL, edge_edge_kernel, vertex_face_kernel  # noqa: E402
@@ -162,30 +162,42 @@ def test_one_step_agrees_with_numpy(i):
     np.testing.assert_allclose(vb, va, rtol=0, atol=1e-10)
 
 
-def test_jacobi_iteration_agrees_with_numpy():
-    """One compiled Jacobi iteration of the proximity impulses changes vbar as ClothCollisions' NumPy one does."""
+BODIES = {"none": [], "floor": [Plane([0, 0, -0.02], [0, 0, 1.0])],
+          "floor and ball": [Plane([0, 0, -0.02], [0, 0, 1.0]), Sphere([0.5, 0.5, -0.3], 0.31)],
+          "union (NumPy's pass)": [Plane([0, 0, -0.02], [0, 0, 1.0]) | Sphere([0.5, 0.5, -0.3], 0.31)],
+          "moving (NumPy's pass)": [MovingSurface(Plane([0, 0, -0.02], [0, 0, 1.0]), velocity=[0.0, 0.1, 0.0])]}
+
+
+@pytest.mark.parametrize("bodies", list(BODIES))
+def test_the_jacobi_iterations_agree_with_numpy(bodies):
+    """The compiled proximity iterations, bodies' pass included, change vbar as ClothCollisions' NumPy ones do."""
     mesh, x, dx = crumpled(8)
-    cc = ClothCollisions(mesh, 0.03, m=np.linspace(1.0, 2.0, mesh.n), pinned=[0], friction=0.3, backend="numpy")
+    dx[:, 2] -= 0.04  # towards the bodies
+    out = []
+    for backend in ("numpy", "numba"):
+        cc = ClothCollisions(mesh, 0.03, m=np.linspace(1.0, 2.0, mesh.n), pinned=[0], friction=0.3,
+                             bodies=BODIES[bodies], iterations=20, backend=backend)
+        vbar = np.ascontiguousarray(dx / H)
+        contacts = ClothCollisions(mesh, 0.03, backend="numpy")._proximity_contacts(x, vbar, H)
+        touched = cc._proximity(contacts, x, vbar, 0.0, H)
+        out.append((touched, vbar, len(contacts[0])))
+    (ta, va, k), (tb, vb, _) = out
+    assert ta == tb > 10 and k > ta
+    assert np.abs(va - dx / H).max() > 0.1  # the impulses changed something
+    np.testing.assert_allclose(vb, va, rtol=0, atol=1e-12 * np.abs(va).max())
+
+
+def test_the_jacobi_iterations_stop_when_no_contact_is_active():
+    """With a large tolerance no contact is active: no iteration runs and vbar is left as it was."""
+    mesh, x, dx = crumpled(8)
     vbar = np.ascontiguousarray(dx / H)
-    contacts = cc._proximity_contacts(x, vbar, H)
-    V, W, N_, D = contacts
-    S = cc._effective(V, W)
-    target = np.where(D < cc.thickness, cc.repulsion * (cc.thickness - D), cc.thickness - D) / H
-    ref = vbar.copy()
-    k = cc._active(ref, V, W, N_, target, H)
-    free = cc.w[V] > 0
-    share = np.where(free[k], np.abs(W[k]), 0.0)
-    load = np.bincount(V[k].ravel(), share.ravel(), minlength=cc.n)
-    c = np.maximum(np.max(np.where(share > 0, load[V[k]], 0.0), axis=1), 1.0)
-    cc._impulses(ref, V[k], W[k], N_[k], S[k], target[k], c, disjoint=False)
-    got = vbar.copy()
-    ptr, col = cloth.cloth_incidence(V, cc.n)
-    active = np.empty(len(V), dtype=bool)
-    count = cloth.cloth_jacobi(got, V, W, N_, S, target, cc.w, ptr, col, H, cc.tol * cc.thickness, cc.friction,
-                               active, np.empty((len(V), 3)), np.empty(cc.n))
-    assert count == len(k) > 10
-    np.testing.assert_array_equal(np.flatnonzero(active), k)
-    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    V, W, N_, D = ClothCollisions(mesh, 0.03, backend="numpy")._proximity_contacts(x, vbar, H)
+    before = vbar.copy()
+    w = np.ones(mesh.n)
+    target = np.zeros(len(V))
+    done, touched, _ = cloth.cloth_impulses(vbar, x, V, W, N_, np.ones(len(V)), target, w, H, 1e3, 0.3, 50, 0.03)
+    assert done == 0 and not touched.any()
+    assert vbar.tobytes() == before.tobytes()
 
 
 def test_same_bits_on_one_and_two_threads():

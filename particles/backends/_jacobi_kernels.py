@@ -1,0 +1,157 @@
+"""The proximity stage's Jacobi iterations, compiled (numba), with the bodies' vertex pass after each.
+
+Imported only by :mod:`particles.backends.cloth`. :func:`proximity_impulses` runs the loop of
+``ClothCollisions._proximity`` (:mod:`particles.collisions.pipeline`, ``method="jacobi"``) in one call:
+each iteration finds the contacts below their target normal velocity, sums each free vertex's load over
+those, gives each an impulse divided by the largest load at its free vertices (with Coulomb friction) and
+adds the impulses to the vertices; then every free vertex of those contacts is moved out of the bodies
+(``BodyStage._bodies`` without the edge samples), when the bodies are primitives at rest
+(:mod:`particles.backends._collider_kernels`' rows). Otherwise the pipeline calls it one iteration at a
+time and runs the NumPy body pass in between.
+
+Work per iteration follows the active contacts, not all of them: their vertices' entries are sorted into
+a compressed-row list (a counting sort, in the order ``np.bincount`` meets them over ``V[k].ravel()``),
+so that each vertex sums its terms in NumPy's order, on one thread: the same bits on any number of
+threads. In a 64^2 fold at its impact, 22k contacts, of which 20k are active at the first iteration and
+a few hundred at the last.
+"""
+
+import math
+
+from ._collider_kernels import surface_H, surface_normal
+from ._kernels import _jit, prange
+
+
+@_jit()
+def _out_of_bodies(p, x0, vbar, h, thickness, friction, kinds, rows):
+    """Vertex `p` moved out of each body's `thickness` at the end of the step, as ``BodyStage._bodies`` does it.
+
+    The bodies are at rest (their velocity is zero): the change of ``vbar`` is the displacement over `h`,
+    then friction takes at most ``friction`` times that change from the tangential velocity.
+    """
+    for b in range(len(kinds)):  # the few bodies, in their order
+        kind, P = kinds[b], rows[b]
+        e0, e1, e2 = x0[p, 0] + h * vbar[p, 0], x0[p, 1] + h * vbar[p, 1], x0[p, 2] + h * vbar[p, 2]
+        if not surface_H(kind, P, 3, e0, e1, e2) < thickness:
+            continue
+        q0, q1, q2 = e0, e1, e2
+        for _ in range(3):  # projection passes (exact at once for signed distances)
+            Hq = surface_H(kind, P, 3, q0, q1, q2)
+            if not Hq < thickness * (1.0 - 1e-9):
+                break
+            n0, n1, n2 = surface_normal(kind, P, 3, q0, q1, q2)
+            q0, q1, q2 = q0 + (thickness - Hq) * n0, q1 + (thickness - Hq) * n1, q2 + (thickness - Hq) * n2
+        d0, d1, d2 = (q0 - e0) / h, (q1 - e1) / h, (q2 - e2) / h
+        vbar[p, 0] += d0
+        vbar[p, 1] += d1
+        vbar[p, 2] += d2
+        if friction > 0:
+            n0, n1, n2 = surface_normal(kind, P, 3, q0, q1, q2)
+            dn = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            u0, u1, u2 = vbar[p, 0], vbar[p, 1], vbar[p, 2]
+            un = u0 * n0 + u1 * n1 + u2 * n2
+            t0, t1, t2 = u0 - un * n0, u1 - un * n1, u2 - un * n2
+            speed = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+            slow = min(friction * dn, speed)
+            f = slow / speed if speed > 0 else 0.0
+            vbar[p, 0] -= f * t0
+            vbar[p, 1] -= f * t1
+            vbar[p, 2] -= f * t2
+
+
+@_jit(parallel=True)
+def proximity_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterations, thickness, kinds, rows,
+                       touched, active, order, impulse, load, ptr, entry):
+    """Up to `iterations` Jacobi iterations of the proximity impulses on `vbar` (n, 3), in place.
+
+    `V`, `W`, `N`, `S`, `target` are the contacts' vertices (k, 4), weights (k, 4), normals (k, 3),
+    inverse effective masses (k,) and target normal velocities (k,); `w` the inverse masses (n,). After
+    each iteration the free vertices of its active contacts are moved out of the bodies `kinds`, `rows`
+    (none when empty). `touched` (k,) is set where a contact got an impulse, `active` (k,) holds the last
+    iteration's; `order` (k,), `impulse` (k, 3), `load` (n,), `ptr` (n + 1,) and `entry` (4 k,) are work
+    arrays. Returns the number of iterations that gave impulses (fewer than `iterations` when one found
+    no contact below its target).
+    """
+    K, n = len(V), len(vbar)
+    done = 0
+    for _ in range(iterations):
+        for k in prange(K):  # the contacts below their target
+            vN = 0.0
+            r0 = r1 = r2 = 0.0
+            for j in range(4):
+                i = V[k, j]
+                r0 += W[k, j] * vbar[i, 0]
+                r1 += W[k, j] * vbar[i, 1]
+                r2 += W[k, j] * vbar[i, 2]
+            vN = N[k, 0] * r0 + N[k, 1] * r1 + N[k, 2] * r2
+            active[k] = (target[k] - vN) * h > tol
+        m = 0
+        for k in range(K):  # the active ones, in increasing order
+            if active[k]:
+                order[m] = k
+                m += 1
+                touched[k] = True
+        if m == 0:
+            break
+        done += 1
+        for p in range(n + 1):  # their vertices' entries, sorted by vertex (a counting sort, in bincount's order)
+            ptr[p] = 0
+        for i in range(m):
+            for j in range(4):
+                ptr[V[order[i], j] + 1] += 1
+        for p in range(n):
+            ptr[p + 1] += ptr[p]
+        for i in range(m):
+            for j in range(4):
+                v = V[order[i], j]
+                entry[ptr[v]] = 4 * i + j
+                ptr[v] += 1
+        for p in range(n - 1, -1, -1):  # the fill moved each start to the next vertex's: back by one
+            ptr[p + 1] = ptr[p]
+        ptr[0] = 0
+        for p in prange(n):  # each free vertex's load: sum of |w_j| over its active contacts
+            s = 0.0
+            if w[p] > 0:
+                for e in range(ptr[p], ptr[p + 1]):
+                    s += abs(W[order[entry[e] // 4], entry[e] % 4])
+            load[p] = s
+        for i in prange(m):  # each active contact's impulse, divided by the largest load at its free vertices
+            k = order[i]
+            c = 0.0
+            for j in range(4):
+                if w[V[k, j]] > 0 and abs(W[k, j]) > 0:
+                    c = max(c, load[V[k, j]])
+            c = max(c, 1.0)
+            r0 = r1 = r2 = 0.0
+            for j in range(4):
+                v = V[k, j]
+                r0 += W[k, j] * vbar[v, 0]
+                r1 += W[k, j] * vbar[v, 1]
+                r2 += W[k, j] * vbar[v, 2]
+            vN = N[k, 0] * r0 + N[k, 1] * r1 + N[k, 2] * r2
+            I = (target[k] - vN) / S[k] / c
+            impulse[i, 0], impulse[i, 1], impulse[i, 2] = I * N[k, 0], I * N[k, 1], I * N[k, 2]
+            if friction > 0:
+                t0, t1, t2 = r0 - vN * N[k, 0], r1 - vN * N[k, 1], r2 - vN * N[k, 2]
+                speed = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+                J = min(friction * I, speed / S[k] / c)
+                f = J / speed if speed > 0 else 0.0
+                impulse[i, 0] -= f * t0
+                impulse[i, 1] -= f * t1
+                impulse[i, 2] -= f * t2
+        for p in prange(n):  # vbar_j += w_j I n / m_j per vertex, then the vertex out of the bodies
+            if ptr[p + 1] == ptr[p]:
+                continue
+            s0 = s1 = s2 = 0.0
+            for e in range(ptr[p], ptr[p + 1]):
+                i, j = entry[e] // 4, entry[e] % 4
+                scale = W[order[i], j] * w[p]
+                s0 += scale * impulse[i, 0]
+                s1 += scale * impulse[i, 1]
+                s2 += scale * impulse[i, 2]
+            vbar[p, 0] += s0
+            vbar[p, 1] += s1
+            vbar[p, 2] += s2
+            if w[p] > 0:
+                _out_of_bodies(p, x0, vbar, h, thickness, friction, kinds, rows)
+    return done
