@@ -232,3 +232,15 @@ def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
             for e in range(found[q + 1] - found[q]):
                 keys[found[q] + e] = q * m + targets[s + e]
     return keys
+
+
+@_jit(parallel=True)
+def key_rows(keys, m, Q, T, out):
+    """``out[k] = (Q[q], T[t])`` for each key ``q m + t``: the vertices of each candidate pair, in one row."""
+    a = Q.shape[1]
+    for k in prange(len(keys)):
+        q, t = keys[k] // m, keys[k] % m
+        for j in range(a):
+            out[k, j] = Q[q, j]
+        for j in range(T.shape[1]):
+            out[k, a + j] = T[t, j]

@@ -279,6 +279,26 @@ def at_time(x, dx, rows, k, t):
             moved_point(x, dx, rows[k, 3], t))
 
 
+@_jit()
+def kept_rows(keep, rows, weights, normal, distance):
+    """The rows where `keep` is True of the four arrays, in order (one pass, no boolean masks)."""
+    k = 0
+    for i in range(len(keep)):
+        k += keep[i]
+    R, Wk, Nk, Dk = np.empty((k, 4), np.int64), np.empty((k, 4)), np.empty((k, 3)), np.empty(k)
+    k = 0
+    for i in range(len(keep)):
+        if keep[i]:
+            for j in range(4):
+                R[k, j] = rows[i, j]
+                Wk[k, j] = weights[i, j]
+            for a in range(3):
+                Nk[k, a] = normal[i, a]
+            Dk[k] = distance[i]
+            k += 1
+    return R, Wk, Nk, Dk
+
+
 @_jit(parallel=True)
 def first_contact_pairs(x0, dx, rows, edge, eta, f_tol, bisections, parallel_tol, hit, time, normal, weights):
     """``ccd.first_contacts`` per candidate pair: `hit` (k,), and where hit the time, normal and weights."""

@@ -23,12 +23,12 @@ imports numba.
 
 import numpy as np
 
-from ._broad_kernels import box_candidates, corner_bounds
-from ._contact_kernels import closest_pairs, first_contact_pairs, proximity_rows
+from ._broad_kernels import box_candidates, corner_bounds, key_rows
+from ._contact_kernels import closest_pairs, first_contact_pairs, kept_rows, proximity_rows
 from ._jacobi_kernels import proximity_impulses
 from ._kernels import pick
 
-__all__ = ["cloth_candidates", "cloth_closest", "cloth_proximity", "cloth_first_contacts",
+__all__ = ["cloth_candidates", "cloth_candidate_rows", "cloth_closest", "cloth_proximity", "cloth_first_contacts",
            "cloth_impulses"]
 
 _EMPTY_MASK = np.zeros(0, dtype=np.bool_)
@@ -44,6 +44,29 @@ def _corners(v_lo, v_hi, idx):
     return lo, hi
 
 
+def _keys(mesh, lo, hi, pad, vertices):
+    """The sorted keys ``iv m + jf`` and ``ie e + je`` of :func:`cloth_candidates`' pairs (None where none)."""
+    F, E = mesh.faces, mesh.edges
+    v_lo = np.ascontiguousarray(lo - pad)
+    v_hi = np.ascontiguousarray(hi + pad)
+    mask = _EMPTY_MASK if vertices is None else np.ascontiguousarray(vertices, dtype=np.bool_)
+    masked = vertices is not None
+    vf = ee = None
+    if len(F) and mesh.n:
+        f_lo, f_hi = _corners(v_lo, v_hi, F)
+        vf = pick(box_candidates, QUERY_WEIGHT * mesh.n)(v_lo, v_hi, f_lo, f_hi, _own(mesh.n), F, False, mask,
+                                                          masked)
+    if len(E) > 1:
+        e_lo, e_hi = _corners(v_lo, v_hi, E)
+        ee = pick(box_candidates, QUERY_WEIGHT * len(E))(e_lo, e_hi, e_lo, e_hi, E, E, True, mask, masked)
+    return vf, ee
+
+
+def _own(n):
+    """Each vertex as a one-vertex element: ``[[0], [1], ..., [n - 1]]``."""
+    return np.arange(n, dtype=np.int64)[:, None]
+
+
 def cloth_candidates(mesh, lo, hi, pad, vertices=None):
     """:func:`particles.collisions.candidates.candidates_in_boxes`, compiled: ``iv, jf, ie, je`` (int64, sorted).
 
@@ -57,23 +80,28 @@ def cloth_candidates(mesh, lo, hi, pad, vertices=None):
     vertices : ndarray of bool, shape (n,), optional
         Only pairs that hold one of these vertices.
     """
-    F, E = mesh.faces, mesh.edges
-    v_lo = np.ascontiguousarray(lo - pad)
-    v_hi = np.ascontiguousarray(hi + pad)
-    mask = _EMPTY_MASK if vertices is None else np.ascontiguousarray(vertices, dtype=np.bool_)
-    masked = vertices is not None
+    vf, ee = _keys(mesh, lo, hi, pad, vertices)
     empty = np.zeros(0, dtype=np.int64)
-    iv = jf = ie = je = empty
-    if len(F) and mesh.n:
-        f_lo, f_hi = _corners(v_lo, v_hi, F)
-        own = np.arange(mesh.n, dtype=np.int64)[:, None]
-        keys = pick(box_candidates, QUERY_WEIGHT * mesh.n)(v_lo, v_hi, f_lo, f_hi, own, F, False, mask, masked)
-        iv, jf = np.divmod(keys, len(F))
-    if len(E) > 1:
-        e_lo, e_hi = _corners(v_lo, v_hi, E)
-        keys = pick(box_candidates, QUERY_WEIGHT * len(E))(e_lo, e_hi, e_lo, e_hi, E, E, True, mask, masked)
-        ie, je = np.divmod(keys, len(E))
+    iv, jf = (empty, empty) if vf is None else np.divmod(vf, len(mesh.faces))
+    ie, je = (empty, empty) if ee is None else np.divmod(ee, len(mesh.edges))
     return iv, jf, ie, je
+
+
+def cloth_candidate_rows(mesh, lo, hi, pad, vertices=None):
+    """:func:`cloth_candidates` as :func:`particles.collisions.candidates.pair_rows` gives them: ``vf, ee``.
+
+    The vertex-face rows ``(vertex, a, b, c)`` and the edge-edge rows ``(p_1, p_2, q_1, q_2)``, shape
+    (k, 4) each, int64, in the order of the sorted keys; the arguments as :func:`cloth_candidates`.
+    """
+    vf, ee = _keys(mesh, lo, hi, pad, vertices)
+    out = []
+    for keys, Q, T in ((vf, _own(mesh.n), mesh.faces), (ee, mesh.edges, mesh.edges)):  # the two kinds of pairs
+        rows = np.empty((0 if keys is None else len(keys), 4), dtype=np.int64)
+        if len(rows):
+            pick(key_rows, len(rows))(keys, len(T), np.ascontiguousarray(Q, dtype=np.int64),
+                                      np.ascontiguousarray(T, dtype=np.int64), rows)
+        out.append(rows)
+    return tuple(out)
 
 
 def cloth_closest(x, rows, edge, parallel_tol):
@@ -102,7 +130,7 @@ def cloth_proximity(x0, vbar, w, x_rest, rows, edge, h, thickness, rest_distance
     xr = np.ascontiguousarray(x_rest) if rest else np.zeros((0, 3))
     pick(proximity_rows, k)(np.ascontiguousarray(x0), np.ascontiguousarray(vbar), w, xr, rest, rows, edge,
                             float(h), thickness, rest_distance, parallel_tol, keep, distance, normal, weights)
-    return rows[keep], weights[keep], normal[keep], distance[keep]
+    return kept_rows(keep, rows, weights, normal, distance)
 
 
 def cloth_first_contacts(x0, dx, rows, edge, eta, ftol, bisections, parallel_tol):

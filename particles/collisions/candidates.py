@@ -215,8 +215,7 @@ class CandidateCache:
         fast = kernels_for(self.backend, mesh.n)
         a, b = self.update(x0, dx, search=fast is None)
         if fast is not None:  # compiled: a search with the step's own boxes finds the pairs the cache would give
-            iv, jf, ie, je = fast.cloth_candidates(mesh, np.minimum(a, b), np.maximum(a, b), 0.5 * pad, moved)
-            return pair_rows(mesh, iv, jf, ie, je)
+            return fast.cloth_candidate_rows(mesh, np.minimum(a, b), np.maximum(a, b), 0.5 * pad, moved)
         iv, jf = np.divmod(self.vf, max(mesh.m, 1))
         ie, je = np.divmod(self.ee, max(len(mesh.edges), 1))
         if moved is not None:
