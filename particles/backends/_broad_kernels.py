@@ -7,7 +7,9 @@ table of the target boxes (faces, or edges) per cell, and each query box
 (a vertex's, or an edge's) walks the cells it covers, one loop iteration
 per query. A pair is reported from one cell only, the componentwise maximum
 of the two boxes' lowest cells, as :func:`particles.collisions.triangle_crossing.box_pairs`
-does, and the closed boxes are then compared exactly: the set of pairs does
+does (each cell's targets are kept in sublists by whether they start in it
+along each axis, so that a query walks only those that can report there),
+and the closed boxes are then compared exactly: the set of pairs does
 not depend on the grid, and it is the NumPy one. Each query writes its own
 slice of the output (sized by a bound from the cells it covers, each slice
 sorted), so the pairs come out sorted by key and with the same bits on any
@@ -41,7 +43,7 @@ def corner_bounds(v_lo, v_hi, idx, lo, hi):
 def grid_shape(q_lo, q_hi, t_lo, t_hi):
     """Origin, cell side and shape of a grid for query and target boxes (cell: the median target extent).
 
-    The cell doubles while the grid would have more than ``64 (queries + targets)`` cells or the targets
+    The cell doubles while the grid would have more than ``8 (queries + targets)`` cells or the targets
     would cover more than 8 cells each on average.
     """
     origin = np.empty(3)
@@ -58,7 +60,7 @@ def grid_shape(q_lo, q_hi, t_lo, t_hi):
         cell = span / len(t_lo) ** (1.0 / 3.0) if span > 0 else 1.0
     cell = max(cell, span * 2.0 ** -40, 1e-300)
     shape = np.empty(3, dtype=np.int64)
-    limit = 64.0 * (len(q_lo) + len(t_lo)) + 1024.0
+    limit = 8.0 * (len(q_lo) + len(t_lo)) + 1024.0  # the table holds 8 sublists per cell
     while True:  # a loop over doublings of the cell
         cells = 1.0
         for a in range(3):
@@ -84,12 +86,19 @@ def cell_of(x, origin, cell, shape, a):
 
 @_jit()
 def cell_table(t_lo, t_hi, origin, cell, shape, keep):
-    """The targets where `keep` is True per cell in compressed rows: ``ptr`` (cells + 1), ``items``; and each
-    target's lowest cell (k, 3), of every target."""
+    """The targets where `keep` is True per cell, in compressed rows of 8 sublists per cell: ``ptr`` (8 cells
+    + 1) and ``items``.
+
+    Sublist ``8 c + s`` of cell ``c = (i, j, l)`` holds the targets whose lowest cell is ``i`` along the
+    first axis when bit 4 of ``s`` is set (else lower), likewise ``j`` for bit 2 and ``l`` for bit 1; each
+    sublist in increasing target. A pair is reported from one cell, the componentwise maximum of the two
+    boxes' lowest cells: past a query's lowest cell along an axis, only targets that start there qualify,
+    so the query walks only the sublists that can report (:func:`wanted`).
+    """
     cells = shape[0] * shape[1] * shape[2]
     low = np.empty((len(t_lo), 3), dtype=np.int64)
     high = np.empty((len(t_lo), 3), dtype=np.int64)
-    ptr = np.zeros(cells + 1, dtype=np.int64)
+    ptr = np.zeros(8 * cells + 1, dtype=np.int64)
     for k in range(len(t_lo)):
         for a in range(3):
             low[k, a] = cell_of(t_lo[k, a], origin, cell, shape, a)
@@ -99,21 +108,33 @@ def cell_table(t_lo, t_hi, origin, cell, shape, keep):
         for i in range(low[k, 0], high[k, 0] + 1):
             for j in range(low[k, 1], high[k, 1] + 1):
                 for l in range(low[k, 2], high[k, 2] + 1):
-                    ptr[(i * shape[1] + j) * shape[2] + l + 1] += 1
-    for c in range(cells):
+                    sub = 4 * (i == low[k, 0]) + 2 * (j == low[k, 1]) + (l == low[k, 2])
+                    ptr[8 * ((i * shape[1] + j) * shape[2] + l) + sub + 1] += 1
+    for c in range(8 * cells):
         ptr[c + 1] += ptr[c]
     fill = ptr[:-1].copy()
-    items = np.empty(ptr[cells], dtype=np.int64)
-    for k in range(len(t_lo)):  # in increasing target: each cell's list is sorted
+    items = np.empty(ptr[8 * cells], dtype=np.int64)
+    for k in range(len(t_lo)):  # in increasing target: each sublist is sorted
         if not keep[k]:
             continue
         for i in range(low[k, 0], high[k, 0] + 1):
             for j in range(low[k, 1], high[k, 1] + 1):
                 for l in range(low[k, 2], high[k, 2] + 1):
-                    c = (i * shape[1] + j) * shape[2] + l
+                    sub = 4 * (i == low[k, 0]) + 2 * (j == low[k, 1]) + (l == low[k, 2])
+                    c = 8 * ((i * shape[1] + j) * shape[2] + l) + sub
                     items[fill[c]] = k
                     fill[c] += 1
-    return ptr, items, low
+    return ptr, items
+
+
+@_jit()
+def wanted(sub, i, j, l, c0, c1, c2):
+    """Whether sublist `sub` of cell ``(i, j, l)`` can report pairs to a query whose lowest cell is ``(c0, c1, c2)``.
+
+    Past the query's lowest cell along an axis, a target must start in this cell along it (the pair's
+    componentwise maximum); at it, any target of the cell does (its lowest cell is at most the query's).
+    """
+    return (i == c0 or sub & 4) and (j == c1 or sub & 2) and (l == c2 or sub & 1)
 
 
 @_jit()
@@ -136,11 +157,12 @@ def holds_masked(A, ia, mask):
 
 
 @_jit()
-def query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, low, Q, T, same, out, start):
+def query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, Q, T, same, out, start):
     """The targets of the table ``ptr, items`` whose boxes overlap query `q`'s and share no vertex with it, into
     ``out[start:]``; their count.
 
-    With `same` (queries and targets are one set), only targets above `q`. Written in the order they are met
+    With `same` (queries and targets are one set), only targets above `q`. Each pair is met once, in the
+    cell at the componentwise maximum of the two lowest cells (:func:`wanted`); written in the order met
     (sorted by the caller).
     """
     found = 0
@@ -151,35 +173,39 @@ def query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, low, Q, T,
     for i in range(c00, c10 + 1):
         for j in range(c01, c11 + 1):
             for l in range(c02, c12 + 1):
-                c = (i * shape[1] + j) * shape[2] + l
-                for e in range(ptr[c], ptr[c + 1]):
-                    t = items[e]
-                    if same and t <= q:
+                c = 8 * ((i * shape[1] + j) * shape[2] + l)
+                for sub in range(8):
+                    if not wanted(sub, i, j, l, c00, c01, c02):
                         continue
-                    # report from the cell at the componentwise maximum of the two lowest cells only
-                    if max(c00, low[t, 0]) != i or max(c01, low[t, 1]) != j or max(c02, low[t, 2]) != l:
-                        continue
-                    if not (q_lo[q, 0] <= t_hi[t, 0] and t_lo[t, 0] <= q_hi[q, 0] and q_lo[q, 1] <= t_hi[t, 1]
-                            and t_lo[t, 1] <= q_hi[q, 1] and q_lo[q, 2] <= t_hi[t, 2] and t_lo[t, 2] <= q_hi[q, 2]):
-                        continue
-                    if shares_vertex(Q, q, T, t):
-                        continue
-                    out[start + found] = t
-                    found += 1
+                    for e in range(ptr[c + sub + 1] - 1, ptr[c + sub] - 1, -1):  # the sublist from its top
+                        t = items[e]
+                        if same and t <= q:  # one set: only targets above the query (the rest are lower still)
+                            break
+                        if not (q_lo[q, 0] <= t_hi[t, 0] and t_lo[t, 0] <= q_hi[q, 0] and q_lo[q, 1] <= t_hi[t, 1]
+                                and t_lo[t, 1] <= q_hi[q, 1] and q_lo[q, 2] <= t_hi[t, 2]
+                                and t_lo[t, 2] <= q_hi[q, 2]):
+                            continue
+                        if shares_vertex(Q, q, T, t):
+                            continue
+                        out[start + found] = t
+                        found += 1
     return found
 
 
 @_jit()
 def query_bound(q, q_lo, q_hi, origin, cell, shape, ptr):
-    """At most how many targets query `q` can find: the entries of the cells its box covers."""
+    """At most how many targets query `q` can find: the entries of the sublists it walks."""
     bound = 0
     i0, i1 = cell_of(q_lo[q, 0], origin, cell, shape, 0), cell_of(q_hi[q, 0], origin, cell, shape, 0)
     j0, j1 = cell_of(q_lo[q, 1], origin, cell, shape, 1), cell_of(q_hi[q, 1], origin, cell, shape, 1)
     l0, l1 = cell_of(q_lo[q, 2], origin, cell, shape, 2), cell_of(q_hi[q, 2], origin, cell, shape, 2)
     for i in range(i0, i1 + 1):
         for j in range(j0, j1 + 1):
-            c = (i * shape[1] + j) * shape[2]
-            bound += ptr[c + l1 + 1] - ptr[c + l0]
+            for l in range(l0, l1 + 1):
+                c = 8 * ((i * shape[1] + j) * shape[2] + l)
+                for sub in range(8):
+                    if wanted(sub, i, j, l, i0, j0, l0):
+                        bound += ptr[c + sub + 1] - ptr[c + sub]
     return bound
 
 
@@ -195,7 +221,7 @@ def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
     the first, where a few vertices still move, walk a few boxes instead of all).
     """
     origin, cell, shape = grid_shape(q_lo, q_hi, t_lo, t_hi)
-    ptr, items, low = cell_table(t_lo, t_hi, origin, cell, shape, np.ones(len(t_lo), dtype=np.bool_))
+    ptr, items = cell_table(t_lo, t_hi, origin, cell, shape, np.ones(len(t_lo), dtype=np.bool_))
     nq = len(q_lo)
     q_in = np.zeros(nq, dtype=np.bool_)
     ptr_in, items_in = ptr, items  # with a mask: the table of the targets that hold a masked vertex
@@ -205,7 +231,7 @@ def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
             t_in[t] = holds_masked(T, t, mask)
         for q in range(nq):
             q_in[q] = holds_masked(Q, q, mask)
-        ptr_in, items_in, _ = cell_table(t_lo, t_hi, origin, cell, shape, t_in)
+        ptr_in, items_in = cell_table(t_lo, t_hi, origin, cell, shape, t_in)
     bounds = np.zeros(nq + 1, dtype=np.int64)
     for q in prange(nq):  # a query outside the mask walks the masked targets' table only
         bounds[q + 1] = query_bound(q, q_lo, q_hi, origin, cell, shape, ptr if q_in[q] or not masked else ptr_in)
@@ -219,7 +245,7 @@ def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
             s = bounds[q]
             whole = q_in[q] or not masked
             f = query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr if whole else ptr_in,
-                      items if whole else items_in, low, Q, T, same, targets, s)
+                      items if whole else items_in, Q, T, same, targets, s)
             targets[s:s + f].sort()
             found[q + 1] = f
     for q in range(nq):
