@@ -25,7 +25,7 @@ import numpy as np
 
 from ._broad_kernels import box_candidates, corner_bounds, key_rows
 from ._contact_kernels import closest_pairs, first_contact_pairs, kept_rows, proximity_rows
-from ._jacobi_kernels import proximity_impulses
+from ._jacobi_kernels import PARTS, SORT_BLOCKS, proximity_impulses
 from ._kernels import pick
 
 __all__ = ["cloth_candidates", "cloth_candidate_rows", "cloth_closest", "cloth_proximity", "cloth_first_contacts",
@@ -191,7 +191,9 @@ def cloth_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterations
     touched, active = np.zeros(k, dtype=np.bool_), np.zeros(k, dtype=np.bool_)
     order, impulse = np.empty(k, dtype=np.int64), np.empty((k, 3))
     load, ptr, entry = np.empty(n), np.empty(n + 1, dtype=np.int64), np.empty(4 * k, dtype=np.int64)
+    counts, parts = np.empty((SORT_BLOCKS, n), dtype=np.int64), np.empty(PARTS + 1, dtype=np.int64)
     done = pick(proximity_impulses, max(k, n))(vbar, np.ascontiguousarray(x0), V, W, N, S, target, w, float(h),
                                                  float(tol), float(friction), int(iterations), float(thickness),
-                                                 kinds, rows, touched, active, order, impulse, load, ptr, entry)
+                                                 kinds, rows, touched, active, order, impulse, load, ptr, entry,
+                                                 counts, parts)
     return done, touched, active

@@ -230,3 +230,30 @@ def test_same_bits_on_one_and_two_threads():
         numba.set_num_threads(before)
     for a, b in zip(*out):
         assert a.tobytes() == b.tobytes()
+
+
+def test_the_jacobi_iterations_give_the_same_bits_on_one_and_two_threads(monkeypatch):
+    """The proximity iterations (sorted in blocks, summed in parts) give the same bits on one thread and on two."""
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("one thread only")
+    import particles.backends._kernels as kernels  # noqa: PLC0415
+
+    monkeypatch.setattr(kernels, "PARALLEL_MIN", 0)  # every loop parallel, however small
+    mesh, x, dx = crumpled(7, n=40)
+    dx[:, 2] -= 0.04
+    vbar = np.ascontiguousarray(dx / H)
+    V, W, N_, D = ClothCollisions(mesh, 0.03, backend="numpy")._proximity_contacts(x, vbar, H)
+    S, target, w = np.sum(W ** 2, axis=1), np.where(D < 0.03, 0.1 * (0.03 - D), 0.03 - D) / H, np.ones(mesh.n)
+    rows = (np.array([0]), np.array([[0.0, 0.0, 1.0, 0.02] + [0.0] * 9]))  # a floor at z = -0.02
+    before = numba.get_num_threads()
+    out = []
+    try:
+        for threads in (1, 2):
+            numba.set_num_threads(threads)
+            v = vbar.copy()
+            done, touched, _ = cloth.cloth_impulses(v, x, V, W, N_, S, target, w, H, 3e-4, 0.3, 30, 0.03, rows)
+            out.append((done, touched.sum(), v.tobytes()))
+    finally:
+        numba.set_num_threads(before)
+    assert out[0][0] > 1 and out[0][1] > 100
+    assert out[0] == out[1]
