@@ -21,7 +21,10 @@ argument (:class:`~particles.springs.Springs`,
 * ``"auto"``: numba when it is installed and the system has at least
   :data:`AUTO_MIN` particles (a 64^2 cloth, a 4k liquid), NumPy otherwise:
   small problems (the lectures' examples, the tests) stay bit for bit those
-  of the reference and never wait for a compiler;
+  of the reference and never wait for a compiler. The cloth collision
+  pipeline, whose work per vertex is that of dozens of force passes, counts
+  its vertices :data:`CLOTH_COLLISION_WEIGHT` times: it compiles from 64
+  vertices (its contacts and verdicts are NumPy's either way);
 * ``None`` (the default of every object): the global choice, set by
   :func:`set_backend` or, for a block, :func:`using`; it starts as the
   environment variable ``PARTICLES_BACKEND`` (``numpy``, ``numba`` or
@@ -138,14 +141,21 @@ import importlib.util
 import os
 import warnings
 
-__all__ = ["BACKENDS", "AUTO_MIN", "available", "check_backend", "resolve", "set_backend", "get_backend",
-           "using", "kernels_for", "compiled_step"]
+__all__ = ["BACKENDS", "AUTO_MIN", "CLOTH_COLLISION_WEIGHT", "available", "check_backend", "resolve", "set_backend",
+           "get_backend", "using", "kernels_for", "compiled_step"]
 
 BACKENDS = ("auto", "numpy", "numba")
 
 # "auto" compiles for systems of this many particles or more: below, a NumPy force pass costs about a
 # millisecond or less, and loading the compiled code (a fraction of a second) would cost more than it saves
 AUTO_MIN = 4096
+
+# the cloth collision pipeline (particles.collisions.ClothCollisions) asks "auto" with this many times its
+# vertices: each vertex carries dozens of force passes' work (its candidate pairs' closest points, up to 50
+# Jacobi iterations, the continuous test), and NumPy's calls cost the same whatever the sheet. Measured with
+# bench/bench_cloth_fold.py --compare (median ms per step, NumPy / compiled): 8^2 6.3 / 1.3, 16^2 18.6 / 2.8,
+# 32^2 about 60 / 8: compiled from 64 vertices
+CLOTH_COLLISION_WEIGHT = 64
 
 ENVIRONMENT = "PARTICLES_BACKEND"
 

@@ -9,7 +9,7 @@ as a Verlet list keeps neighbours, for the pipeline of :mod:`particles.collision
 
 import numpy as np
 
-from ..backends import check_backend, kernels_for
+from ..backends import CLOTH_COLLISION_WEIGHT, check_backend, kernels_for
 from .triangle_crossing import box_pairs
 
 __all__ = ["element_boxes", "candidate_elements", "candidates_in_boxes", "pair_rows", "candidate_pairs",
@@ -212,7 +212,7 @@ class CandidateCache:
         vertex-face rows ``(vertex, a, b, c)`` and the edge-edge rows ``(p_1, p_2, q_1, q_2)``.
         """
         mesh = self.mesh
-        fast = kernels_for(self.backend, mesh.n)
+        fast = kernels_for(self.backend, CLOTH_COLLISION_WEIGHT * mesh.n)
         a, b = self.update(x0, dx, search=fast is None)
         if fast is not None:  # compiled: a search with the step's own boxes finds the pairs the cache would give
             return fast.cloth_candidate_rows(mesh, np.minimum(a, b), np.maximum(a, b), 0.5 * pad, moved)

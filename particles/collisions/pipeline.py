@@ -111,7 +111,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import as_float_array, count, mass_array, nonnegative_number, pinned_indices, positive_number
-from ..backends import check_backend, kernels_for
+from ..backends import CLOTH_COLLISION_WEIGHT, check_backend, kernels_for
 from ..integrators.solvers import after
 from ..xpbd.colouring import color_constraints
 from .bodies import BodyStage, StaticBody
@@ -223,7 +223,8 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
         ``tol thickness`` short of its target (default 0.01).
     backend : {None, "auto", "numpy", "numba"}
         Who runs the broad phase, the proximity tests and Jacobi impulses, and the continuous test
-        (:mod:`particles.backends`; :mod:`particles.backends.cloth`: the same contacts and verdicts).
+        (:mod:`particles.backends`; :mod:`particles.backends.cloth`: the same contacts and verdicts);
+        "auto" compiles from 64 vertices (:data:`particles.backends.CLOTH_COLLISION_WEIGHT`).
 
     Attributes
     ----------
@@ -349,7 +350,7 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
     def _detect(self, x0, vbar, h, moved=None):
         dx = h * vbar
         vf, ee = self.candidates.pairs(x0, dx, 2 * self.eta, moved)
-        fast = kernels_for(self.backend, self.n)
+        fast = kernels_for(self.backend, CLOTH_COLLISION_WEIGHT * self.n)
         return self._drop_fixed(detect_pairs(x0, dx - np.median(dx, axis=0), vf, ee, self.eta, fast))
 
     def _ccd_impulses(self, impacts, x0, vbar, h):

@@ -10,7 +10,7 @@ Gauss-Seidel over vertex-disjoint colour groups), each iteration followed by the
 
 import numpy as np
 
-from ..backends import kernels_for
+from ..backends import CLOTH_COLLISION_WEIGHT, kernels_for
 from ..xpbd.colouring import color_constraints
 from .bodies import StaticBody
 from .proximity import PARALLEL, dot, edge_edge_kernel, vertex_face_kernel
@@ -37,7 +37,7 @@ class ProximityStage:
     def _proximity_contacts(self, x0, vbar, h):
         """Pairs within thickness at x0 or ending within it: vertices, weights, normals, distances."""
         vf, ee = self.candidates.pairs(x0, h * vbar, self.thickness)
-        fast = kernels_for(self.backend, self.n)
+        fast = kernels_for(self.backend, CLOTH_COLLISION_WEIGHT * self.n)
         parts = []
         for idx, edge in ((vf, False), (ee, True)):  # the two kinds of pairs
             if not len(idx):
@@ -76,7 +76,7 @@ class ProximityStage:
         inside = D < self.thickness
         target = np.where(inside, self.repulsion * (self.thickness - D), self.thickness - D) / h
         groups = color_constraints(V, self.n) if self.method == "gauss-seidel" else None
-        fast = kernels_for(self.backend, self.n) if groups is None else None
+        fast = kernels_for(self.backend, CLOTH_COLLISION_WEIGHT * self.n) if groups is None else None
         if fast is not None:
             return self._compiled_proximity(fast, V, W, N, S, target, x0, vbar, t, h)
         touched = np.zeros(len(V), dtype=bool)

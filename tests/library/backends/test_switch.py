@@ -48,6 +48,32 @@ def test_the_grader_workers_never_compile():
 
 
 @needs_numba
+@needs_numba
+@pytest.mark.parametrize("side, compiled", [(7, False), (8, True)])
+def test_auto_compiles_the_cloth_collisions_from_64_vertices(monkeypatch, side, compiled):
+    """"auto" runs every stage of ClothCollisions compiled from 64 vertices (an 8 x 8 sheet), NumPy below."""
+    import numpy as np  # noqa: PLC0415
+
+    from particles.backends import compiled as kernels  # noqa: PLC0415
+    from particles.collisions import ClothCollisions, Plane, TriangleMesh  # noqa: PLC0415
+
+    monkeypatch.delenv("PARTICLES_BACKEND", raising=False)
+    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
+    calls = []
+    for name in ("cloth_candidate_rows", "cloth_proximity", "cloth_impulses", "cloth_first_contacts"):
+        original = getattr(kernels, name)
+        monkeypatch.setattr(kernels, name, lambda *a, _f=original, _n=name, **k: calls.append(_n) or _f(*a, **k))
+    u, v = np.meshgrid(np.linspace(0, 0.02, side), np.linspace(0, 0.02, side))  # spacing < thickness: contacts
+    x0 = np.stack([u.ravel(), v.ravel(), 0.004 * np.sin(40 * u.ravel())], axis=1)
+    x1 = x0 + [0.0, 0.0, -0.01]
+    cc = ClothCollisions(TriangleMesh.grid(side, side), 0.005, bodies=[Plane([0, 0, 0.0], [0, 0, 1.0])],
+                         backend="auto")
+    cc.resolve(x0, x1, (x1 - x0) / 0.01, 0.0, 0.01)
+    assert backends.CLOTH_COLLISION_WEIGHT * 64 == backends.AUTO_MIN
+    assert sorted(set(calls)) == (["cloth_candidate_rows", "cloth_first_contacts", "cloth_impulses", "cloth_proximity"]
+                                  if compiled else [])
+
+
 def test_auto_falls_back_to_numpy_when_numba_cannot_load(monkeypatch):
     """With numba unusable, 'auto' warns and uses NumPy from then on; an explicit 'numba' raises."""
     monkeypatch.delattr(backends, "compiled", raising=False)
