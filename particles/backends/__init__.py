@@ -124,7 +124,7 @@ Modules
   continuous test, compiled (the same contacts and verdicts as NumPy);
 * ``_kernels.py``, ``_step_kernels.py``, ``_pbd_kernels.py``, ``_provot_kernels.py``,
   ``_collider_kernels.py``, ``_factored_kernels.py``, ``_broad_kernels.py``, ``_contact_kernels.py``,
-  ``_jacobi_kernels.py``: the numba loops they call (private to the package).
+  ``_jacobi_kernels.py``, ``_body_kernels.py``: the numba loops they call (private to the package).
 
 Examples
 --------

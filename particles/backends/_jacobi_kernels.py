@@ -5,9 +5,9 @@ Imported only by :mod:`particles.backends.cloth`. :func:`proximity_impulses` run
 each iteration finds the contacts below their target normal velocity, sums each free vertex's load over
 those, gives each an impulse divided by the largest load at its free vertices (with Coulomb friction) and
 adds the impulses to the vertices; then every free vertex of those contacts is moved out of the bodies
-(``BodyStage._bodies`` without the edge samples), when the bodies are primitives at rest
-(:mod:`particles.backends._collider_kernels`' rows). Otherwise the pipeline calls it one iteration at a
-time and runs the NumPy body pass in between.
+(``BodyStage._bodies`` without the edge samples, :func:`particles.backends._body_kernels.out_of_bodies`),
+when the bodies are primitives at rest (:mod:`particles.backends._collider_kernels`' rows). Otherwise the
+pipeline calls it one iteration at a time and runs the NumPy body pass in between.
 
 Work per iteration follows the active contacts, not all of them: their vertices' entries are sorted into
 a compressed-row list (a counting sort in blocks of contacts, in the order ``np.bincount`` meets them over
@@ -21,49 +21,12 @@ import math
 
 import numpy as np
 
-from ._collider_kernels import surface_H, surface_normal
+from ._body_kernels import out_of_bodies
 from ._kernels import _jit, prange
 
 
 SORT_BLOCKS = 8  # blocks of active contacts sorted by vertex in parallel (any number gives the same order)
 PARTS = 64  # parts of about equal entries that the per-vertex sums are split into (static: any thread count)
-
-
-@_jit()
-def _out_of_bodies(p, x0, vbar, h, thickness, friction, kinds, rows):
-    """Vertex `p` moved out of each body's `thickness` at the end of the step, as ``BodyStage._bodies`` does it.
-
-    The bodies are at rest (their velocity is zero): the change of ``vbar`` is the displacement over `h`,
-    then friction takes at most ``friction`` times that change from the tangential velocity.
-    """
-    for b in range(len(kinds)):  # the few bodies, in their order
-        kind, P = kinds[b], rows[b]
-        e0, e1, e2 = x0[p, 0] + h * vbar[p, 0], x0[p, 1] + h * vbar[p, 1], x0[p, 2] + h * vbar[p, 2]
-        if not surface_H(kind, P, 3, e0, e1, e2) < thickness:
-            continue
-        q0, q1, q2 = e0, e1, e2
-        for _ in range(3):  # projection passes (exact at once for signed distances)
-            Hq = surface_H(kind, P, 3, q0, q1, q2)
-            if not Hq < thickness * (1.0 - 1e-9):
-                break
-            n0, n1, n2 = surface_normal(kind, P, 3, q0, q1, q2)
-            q0, q1, q2 = q0 + (thickness - Hq) * n0, q1 + (thickness - Hq) * n1, q2 + (thickness - Hq) * n2
-        d0, d1, d2 = (q0 - e0) / h, (q1 - e1) / h, (q2 - e2) / h
-        vbar[p, 0] += d0
-        vbar[p, 1] += d1
-        vbar[p, 2] += d2
-        if friction > 0:
-            n0, n1, n2 = surface_normal(kind, P, 3, q0, q1, q2)
-            dn = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-            u0, u1, u2 = vbar[p, 0], vbar[p, 1], vbar[p, 2]
-            un = u0 * n0 + u1 * n1 + u2 * n2
-            t0, t1, t2 = u0 - un * n0, u1 - un * n1, u2 - un * n2
-            speed = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
-            slow = min(friction * dn, speed)
-            f = slow / speed if speed > 0 else 0.0
-            vbar[p, 0] -= f * t0
-            vbar[p, 1] -= f * t1
-            vbar[p, 2] -= f * t2
 
 
 @_jit(parallel=True)
@@ -76,8 +39,8 @@ def proximity_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterat
     each iteration the free vertices of its active contacts are moved out of the bodies `kinds`, `rows`
     (none when empty). `touched` (k,) is set where a contact got an impulse, `active` (k,) holds the last
     iteration's; `order` (k,), `impulse` (k, 3), `load` (n,), `ptr` (n + 1,), `entry` (4 k,), `counts`
-    (SORT_BLOCKS, n) and `parts` (PARTS + 1,) are work arrays. Returns the number of iterations that gave impulses (fewer than `iterations` when one found
-    no contact below its target).
+    (SORT_BLOCKS, n) and `parts` (PARTS + 1,) are work arrays. Returns the number of iterations that gave
+    impulses (fewer than `iterations` when one found no contact below its target).
     """
     K, n = len(V), len(vbar)
     done = 0
@@ -172,5 +135,5 @@ def proximity_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterat
                 vbar[p, 1] += s1
                 vbar[p, 2] += s2
                 if w[p] > 0:
-                    _out_of_bodies(p, x0, vbar, h, thickness, friction, kinds, rows)
+                    out_of_bodies(p, x0, vbar, h, thickness, friction, kinds, rows)
     return done

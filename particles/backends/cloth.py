@@ -13,6 +13,8 @@ numba. Each returns what the NumPy stage it replaces returns:
 * :func:`cloth_closest`, :func:`cloth_first_contacts`: the closest points
   of :mod:`particles.collisions.proximity` and the continuous test of
   :mod:`particles.collisions.ccd`, pair by pair (:mod:`particles.backends._contact_kernels`);
+* :func:`cloth_body_vertices`, :func:`cloth_low_edge_samples`: the bodies' vertex pass and the test of
+  their edge samples, for primitives at rest (:mod:`particles.backends._body_kernels`);
 * :func:`cloth_impulses`: the Jacobi iterations of the proximity impulses, with the bodies' vertex pass
   after each when the bodies are primitives at rest (:mod:`particles.backends._jacobi_kernels`).
 
@@ -23,13 +25,14 @@ imports numba.
 
 import numpy as np
 
+from ._body_kernels import body_vertices, low_edge_samples
 from ._broad_kernels import box_candidates, corner_bounds, key_rows
 from ._contact_kernels import closest_pairs, first_contact_pairs, kept_rows, proximity_rows
 from ._jacobi_kernels import PARTS, SORT_BLOCKS, proximity_impulses
 from ._kernels import pick
 
 __all__ = ["cloth_candidates", "cloth_candidate_rows", "cloth_closest", "cloth_proximity", "cloth_first_contacts",
-           "cloth_impulses"]
+           "cloth_impulses", "cloth_body_vertices", "cloth_low_edge_samples"]
 
 _EMPTY_MASK = np.zeros(0, dtype=np.bool_)
 
@@ -197,3 +200,39 @@ def cloth_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterations
                                                  kinds, rows, touched, active, order, impulse, load, ptr, entry,
                                                  counts, parts)
     return done, touched, active
+
+
+def cloth_body_vertices(x0, vbar, free, h, thickness, friction, bodies):
+    """``BodyStage._bodies``' vertex pass for bodies at rest: `free` vertices moved out of their thickness.
+
+    Parameters
+    ----------
+    x0, vbar : ndarray, shape (n, 3)
+        Start positions (m) and the step's average velocities (m/s, changed in place).
+    free : ndarray of bool, shape (n,)
+        The vertices treated.
+    h, thickness, friction : float
+        Step (s), distance kept (m), Coulomb coefficient.
+    bodies : tuple (kinds, rows)
+        As :func:`particles.backends.fixes.surface_rows` gives them (one body, or several in turn).
+
+    Returns
+    -------
+    int
+        Vertex-body pairs closer than `thickness` at the end of the step (NumPy's count).
+    """
+    kinds, rows = bodies
+    return int(pick(body_vertices, len(vbar))(np.ascontiguousarray(x0), vbar, np.ascontiguousarray(free), float(h),
+                                              float(thickness), float(friction), kinds, rows))
+
+
+def cloth_low_edge_samples(x0, vbar, h, edges, w, samples, target, body):
+    """Edge samples that end closer than `target` to one body at rest and can move (``BodyStage._edges_out``).
+
+    `edges` (e, 2), inverse masses `w` (n,), `samples` the fractions along each edge, `body` a pair
+    ``(kind, row)`` of :func:`particles.backends.fixes.surface_rows`' table. Returns their count.
+    """
+    kind, row = body
+    return int(pick(low_edge_samples, QUERY_WEIGHT * len(edges))(np.ascontiguousarray(x0), vbar, float(h), edges, w,
+                                                                 np.asarray(samples, dtype=float), float(target),
+                                                                 int(kind), row))

@@ -19,12 +19,13 @@ from ._kernels import nbody as nbody_sums
 from ._pbd_kernels import distance_group, distance_jacobi
 from ._step_kernels import GUST, PER_MASS, PHASE, WAVELENGTH, clamp_forces, symplectic_euler_steps
 from .cloth import cloth_candidate_rows, cloth_candidates, cloth_closest, cloth_first_contacts, cloth_impulses
-from .cloth import cloth_proximity
+from .cloth import cloth_body_vertices, cloth_low_edge_samples, cloth_proximity
 from .fixes import collide, provot, surface_rows
 
 __all__ = ["springs", "bending", "lennard_jones", "nbody", "distance_project", "CompiledStep", "StepParts",
            "provot", "collide", "cloth_candidates", "cloth_candidate_rows", "cloth_closest", "cloth_proximity",
-           "cloth_first_contacts", "cloth_impulses", "surface_rows"]
+           "cloth_first_contacts", "cloth_impulses", "cloth_body_vertices", "cloth_low_edge_samples",
+           "surface_rows"]
 
 
 def _store(owner):

@@ -10,6 +10,7 @@ that a thin body does not slip between two vertices. :class:`BodyStage` holds th
 
 import numpy as np
 
+from ..backends import CLOTH_COLLISION_WEIGHT, kernels_for
 from .proximity import dot
 
 __all__ = ["EDGE_SAMPLES", "StaticBody", "BodyStage"]
@@ -34,8 +35,9 @@ class StaticBody:
 class BodyStage:
     """The body stages of :class:`~particles.collisions.pipeline.ClothCollisions` (a base class of it).
 
-    They use its ``mesh``, ``n``, ``w`` (inverse masses), ``thickness``, ``friction``, ``bodies`` and
-    ``_scatter``.
+    They use its ``mesh``, ``n``, ``w`` (inverse masses), ``thickness``, ``friction``, ``bodies``, ``backend``
+    and ``_scatter``. Compiled (:func:`particles.backends.cloth.cloth_body_vertices`) when every body is a
+    primitive at rest; an edge sample that comes too close is then treated by the NumPy pass.
     """
 
     def _bodies(self, x0, vbar, t, h, edges=True, subset=None):
@@ -45,8 +47,16 @@ class BodyStage:
         if subset is not None:
             free = free & subset
         E = self.mesh.edges
-        for body in self.bodies:  # a loop over the few bodies
+        fast, table = self._compiled_bodies()
+        for b, body in enumerate(self.bodies):  # a loop over the few bodies
             surface = body.at(t + h)
+            if table is not None:  # at rest and primitive: compiled, NumPy's arithmetic vertex by vertex
+                one = (table[0][b:b + 1], table[1][b:b + 1])
+                nv += fast.cloth_body_vertices(x0, vbar, free, h, self.thickness, self.friction, one)
+                if edges and len(E) and fast.cloth_low_edge_samples(x0, vbar, h, E, self.w, EDGE_SAMPLES,
+                                                                    0.5 * self.thickness, (one[0][0], one[1][0])):
+                    ne += self._edges_out(body, surface, x0, vbar, t, h)
+                continue
             xe = x0 + h * vbar
             idx = np.flatnonzero(free)
             H = surface._H(xe[idx])
@@ -65,6 +75,13 @@ class BodyStage:
             if edges and len(E):
                 ne += self._edges_out(body, surface, x0, vbar, t, h)
         return nv, ne
+
+    def _compiled_bodies(self):
+        """The compiled kernels and the bodies' table when they run compiled (all primitives at rest), else None's."""
+        fast = kernels_for(self.backend, CLOTH_COLLISION_WEIGHT * self.n)
+        if fast is None or not all(type(b) is StaticBody for b in self.bodies):
+            return None, None
+        return fast, fast.surface_rows([b.surface for b in self.bodies])
 
     def _respond_body(self, body, vbar, idx, p, dx, n, t1, h):
         """``vbar`` of vertices `idx` moved by `dx` (along `n`) to `p`, then Coulomb friction relative to the body."""

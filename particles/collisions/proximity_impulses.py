@@ -12,7 +12,6 @@ import numpy as np
 
 from ..backends import CLOTH_COLLISION_WEIGHT, kernels_for
 from ..xpbd.colouring import color_constraints
-from .bodies import StaticBody
 from .proximity import PARALLEL, dot, edge_edge_kernel, vertex_face_kernel
 
 __all__ = ["ProximityStage"]
@@ -22,8 +21,8 @@ class ProximityStage:
     """The proximity stage of :class:`~particles.collisions.pipeline.ClothCollisions` (a base class of it).
 
     It uses its ``n``, ``w``, ``thickness``, ``friction``, ``repulsion``, ``rest_distance``, ``x_rest``,
-    ``iterations``, ``method``, ``tol``, ``backend``, ``bodies``, ``candidates``, ``_bodies``, ``_scatter``,
-    ``_relative`` and ``_effective``.
+    ``iterations``, ``method``, ``tol``, ``backend``, ``bodies``, ``candidates``, ``_bodies``,
+    ``_compiled_bodies``, ``_scatter``, ``_relative`` and ``_effective``.
     """
 
     def _rest_far(self, vertices, edge):
@@ -108,8 +107,7 @@ class ProximityStage:
 
     def _compiled_proximity(self, fast, V, W, N, S, target, x0, vbar, t, h):
         """:meth:`_proximity`'s Jacobi iterations compiled: in one call when the bodies are primitives at rest."""
-        surfaces = [b.surface for b in self.bodies if type(b) is StaticBody]
-        rows = fast.surface_rows(surfaces) if len(surfaces) == len(self.bodies) else None
+        rows = self._compiled_bodies()[1]
         args = (vbar, x0, V, W, N, S, target, self.w, h, self.tol * self.thickness, self.friction)
         if rows is not None or not self.bodies:
             _, touched, _ = fast.cloth_impulses(*args, self.iterations, self.thickness, rows)

@@ -187,6 +187,27 @@ def test_the_jacobi_iterations_agree_with_numpy(bodies):
     np.testing.assert_allclose(vb, va, rtol=0, atol=1e-12 * np.abs(va).max())
 
 
+SMALL_BALL = [Sphere([0.5 + 0.5 / (N - 1), 0.5 + 0.3 / (N - 1), 0.0], 0.03)]  # between two vertices of the sheet
+
+
+@pytest.mark.parametrize("bodies", ["floor and ball", "small ball", "union (NumPy's pass)"])
+def test_the_body_pass_agrees_with_numpy(bodies):
+    """Compiled, the bodies' pass (vertices, then edge samples) moves the sheet as NumPy's does, with its counts."""
+    mesh, x, dx = crumpled(8)
+    dx[:, 2] -= 0.04
+    shapes = dict(BODIES, **{"small ball": SMALL_BALL})[bodies]
+    out = []
+    for backend in ("numpy", "numba"):
+        cc = ClothCollisions(mesh, 0.03, m=np.linspace(1.0, 2.0, mesh.n), pinned=[0], friction=0.3, bodies=shapes,
+                             backend=backend)
+        vbar = np.ascontiguousarray(dx / H)
+        out.append((cc._bodies(x, vbar, 0.0, H), vbar))
+    (ca, va), (cb, vb) = out
+    assert ca == cb and ca[0] > 0 and ca[1] > 0  # vertices and edge samples moved out
+    assert np.abs(va - dx / H).max() > 1.0
+    np.testing.assert_allclose(vb, va, rtol=0, atol=1e-12 * np.abs(va).max())
+
+
 def test_the_jacobi_iterations_stop_when_no_contact_is_active():
     """With a large tolerance no contact is active: no iteration runs and vbar is left as it was."""
     mesh, x, dx = crumpled(8)
