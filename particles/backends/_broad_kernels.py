@@ -270,3 +270,54 @@ def key_rows(keys, m, Q, T, out):
             out[k, j] = Q[q, j]
         for j in range(T.shape[1]):
             out[k, a + j] = T[t, j]
+
+
+@_jit()
+def _touching(q, q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, t_list, out, start, write):
+    """The targets of query `q` in a masked search without a grid (all of them when `q` holds a masked vertex,
+    else those of `t_list`), in increasing order, written into ``out[start:]`` when `write`; their count."""
+    found = 0
+    every = q_in[q]
+    count = len(t_lo) if every else len(t_list)
+    for e in range(q + 1 if every and same else 0, count):
+        t = e if every else t_list[e]
+        if same and t <= q:
+            continue
+        if not (q_lo[q, 0] <= t_hi[t, 0] and t_lo[t, 0] <= q_hi[q, 0] and q_lo[q, 1] <= t_hi[t, 1]
+                and t_lo[t, 1] <= q_hi[q, 1] and q_lo[q, 2] <= t_hi[t, 2] and t_lo[t, 2] <= q_hi[q, 2]):
+            continue
+        if shares_vertex(Q, q, T, t):
+            continue
+        if write:
+            out[start + found] = t
+        found += 1
+    return found
+
+
+@_jit(parallel=True)
+def touching_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, t_list):
+    """:func:`box_candidates` with a mask touching few elements, without a grid: sorted keys ``q len(T) + t``.
+
+    A query that holds a masked vertex (`q_in`) is tested against every target, any other against the
+    targets that hold one (`t_list`, increasing): the pairs of :func:`box_candidates`, as
+    :func:`particles.collisions.candidates.candidates_touching` tests them. Counted, then written.
+    """
+    nq, m = len(q_lo), len(t_lo)
+    found = np.zeros(nq + 1, dtype=np.int64)
+    blocks = (nq + QUERY_BLOCK - 1) // QUERY_BLOCK
+    empty = np.zeros(0, dtype=np.int64)
+    for b in prange(blocks):
+        for q in range(b * QUERY_BLOCK, min(nq, (b + 1) * QUERY_BLOCK)):
+            found[q + 1] = _touching(q, q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, t_list, empty, 0, False)
+    for q in range(nq):
+        found[q + 1] += found[q]
+    targets = np.empty(found[nq], dtype=np.int64)
+    for b in prange(blocks):
+        for q in range(b * QUERY_BLOCK, min(nq, (b + 1) * QUERY_BLOCK)):
+            _touching(q, q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, t_list, targets, found[q], True)
+    keys = np.empty(found[nq], dtype=np.int64)
+    for b in prange(blocks):
+        for q in range(b * QUERY_BLOCK, min(nq, (b + 1) * QUERY_BLOCK)):
+            for e in range(found[q], found[q + 1]):
+                keys[e] = q * m + targets[e]
+    return keys

@@ -9,7 +9,9 @@ numba. Each returns what the NumPy stage it replaces returns:
   :func:`particles.collisions.candidates.candidates_in_boxes` (the same
   sorted sets: a bucket grid walked box by box, :mod:`particles.backends._broad_kernels`);
   :meth:`~particles.collisions.candidates.CandidateCache.pairs` searches each call's own boxes with it,
-  which gives the rows its cache would (the cache only ever holds more pairs than the boxes select);
+  which gives the rows its cache would (the cache only ever holds more pairs than the boxes select); a
+  masked search that touches few elements tests them against every box instead of building a grid
+  (:func:`particles.backends._broad_kernels.touching_candidates`);
 * :func:`cloth_closest`, :func:`cloth_first_contacts`: the closest points
   of :mod:`particles.collisions.proximity` and the continuous test of
   :mod:`particles.collisions.ccd`, pair by pair (:mod:`particles.backends._contact_kernels`);
@@ -26,7 +28,7 @@ imports numba.
 import numpy as np
 
 from ._body_kernels import body_vertices, low_edge_samples
-from ._broad_kernels import box_candidates, corner_bounds, key_rows
+from ._broad_kernels import box_candidates, corner_bounds, key_rows, touching_candidates
 from ._contact_kernels import closest_pairs, first_contact_pairs, kept_rows, proximity_rows
 from ._jacobi_kernels import PARTS, SORT_BLOCKS, proximity_impulses
 from ._kernels import pick
@@ -39,6 +41,10 @@ _EMPTY_MASK = np.zeros(0, dtype=np.bool_)
 # a box query walks the cells its box covers and tests their boxes: the work of about this many items of pick's
 # threshold (a spring's force); 1k vertices or edges already pay for the threads (a 32^2 sheet: 2 ms a search)
 QUERY_WEIGHT = 16
+
+# a grid search costs about as much as this many box tests per query and target (building the grid and its
+# tables, walking the cells): a masked search that needs fewer tests element against element makes none
+GRID_TESTS = 64
 
 
 def _corners(v_lo, v_hi, idx):
@@ -53,16 +59,26 @@ def _keys(mesh, lo, hi, pad, vertices):
     v_lo = np.ascontiguousarray(lo - pad)
     v_hi = np.ascontiguousarray(hi + pad)
     mask = _EMPTY_MASK if vertices is None else np.ascontiguousarray(vertices, dtype=np.bool_)
-    masked = vertices is not None
     vf = ee = None
     if len(F) and mesh.n:
         f_lo, f_hi = _corners(v_lo, v_hi, F)
-        vf = pick(box_candidates, QUERY_WEIGHT * mesh.n)(v_lo, v_hi, f_lo, f_hi, _own(mesh.n), F, False, mask,
-                                                          masked)
+        vf = _search(v_lo, v_hi, f_lo, f_hi, _own(mesh.n), F, False, mask, vertices is not None)
     if len(E) > 1:
         e_lo, e_hi = _corners(v_lo, v_hi, E)
-        ee = pick(box_candidates, QUERY_WEIGHT * len(E))(e_lo, e_hi, e_lo, e_hi, E, E, True, mask, masked)
+        ee = _search(e_lo, e_hi, e_lo, e_hi, E, E, True, mask, vertices is not None)
     return vf, ee
+
+
+def _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
+    """Keys of the overlapping pairs: the grid of :func:`box_candidates`, or, for a mask that touches few
+    elements, every masked element tested against all (:func:`touching_candidates`, no grid to build)."""
+    if masked:
+        q_in, t_in = mask[Q].any(axis=1), mask[T].any(axis=1)
+        t_list = np.flatnonzero(t_in)
+        if int(q_in.sum()) * len(T) + len(Q) * len(t_list) <= GRID_TESTS * (len(Q) + len(T)):
+            return pick(touching_candidates, QUERY_WEIGHT * len(Q))(q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in,
+                                                                    t_list)
+    return pick(box_candidates, QUERY_WEIGHT * len(Q))(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked)
 
 
 def _own(n):
