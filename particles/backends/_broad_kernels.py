@@ -157,6 +157,21 @@ def holds_masked(A, ia, mask):
 
 
 @_jit()
+def cell_range(q, q_lo, q_hi, origin, cell, shape):
+    """The cells query `q`'s box covers: its lowest and highest cell along each axis (six scalars, no array)."""
+    return (cell_of(q_lo[q, 0], origin, cell, shape, 0), cell_of(q_hi[q, 0], origin, cell, shape, 0),
+            cell_of(q_lo[q, 1], origin, cell, shape, 1), cell_of(q_hi[q, 1], origin, cell, shape, 1),
+            cell_of(q_lo[q, 2], origin, cell, shape, 2), cell_of(q_hi[q, 2], origin, cell, shape, 2))
+
+
+@_jit()
+def overlap(q_lo, q_hi, q, t_lo, t_hi, t):
+    """Whether the closed boxes of query `q` and target `t` overlap (compared exactly, as NumPy does)."""
+    return (q_lo[q, 0] <= t_hi[t, 0] and t_lo[t, 0] <= q_hi[q, 0] and q_lo[q, 1] <= t_hi[t, 1]
+            and t_lo[t, 1] <= q_hi[q, 1] and q_lo[q, 2] <= t_hi[t, 2] and t_lo[t, 2] <= q_hi[q, 2])
+
+
+@_jit()
 def query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, Q, T, same, out, start):
     """The targets of the table ``ptr, items`` whose boxes overlap query `q`'s and share no vertex with it, into
     ``out[start:]``; their count.
@@ -166,10 +181,7 @@ def query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, Q, T, same
     (sorted by the caller).
     """
     found = 0
-    # the cells the box covers, c0 to c1 along each axis (scalars: no array per query)
-    c00, c10 = cell_of(q_lo[q, 0], origin, cell, shape, 0), cell_of(q_hi[q, 0], origin, cell, shape, 0)
-    c01, c11 = cell_of(q_lo[q, 1], origin, cell, shape, 1), cell_of(q_hi[q, 1], origin, cell, shape, 1)
-    c02, c12 = cell_of(q_lo[q, 2], origin, cell, shape, 2), cell_of(q_hi[q, 2], origin, cell, shape, 2)
+    c00, c10, c01, c11, c02, c12 = cell_range(q, q_lo, q_hi, origin, cell, shape)
     for i in range(c00, c10 + 1):
         for j in range(c01, c11 + 1):
             for l in range(c02, c12 + 1):
@@ -181,11 +193,7 @@ def query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, Q, T, same
                         t = items[e]
                         if same and t <= q:  # one set: only targets above the query (the rest are lower still)
                             break
-                        if not (q_lo[q, 0] <= t_hi[t, 0] and t_lo[t, 0] <= q_hi[q, 0] and q_lo[q, 1] <= t_hi[t, 1]
-                                and t_lo[t, 1] <= q_hi[q, 1] and q_lo[q, 2] <= t_hi[t, 2]
-                                and t_lo[t, 2] <= q_hi[q, 2]):
-                            continue
-                        if shares_vertex(Q, q, T, t):
+                        if not overlap(q_lo, q_hi, q, t_lo, t_hi, t) or shares_vertex(Q, q, T, t):
                             continue
                         out[start + found] = t
                         found += 1
@@ -196,9 +204,7 @@ def query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, Q, T, same
 def query_bound(q, q_lo, q_hi, origin, cell, shape, ptr):
     """At most how many targets query `q` can find: the entries of the sublists it walks."""
     bound = 0
-    i0, i1 = cell_of(q_lo[q, 0], origin, cell, shape, 0), cell_of(q_hi[q, 0], origin, cell, shape, 0)
-    j0, j1 = cell_of(q_lo[q, 1], origin, cell, shape, 1), cell_of(q_hi[q, 1], origin, cell, shape, 1)
-    l0, l1 = cell_of(q_lo[q, 2], origin, cell, shape, 2), cell_of(q_hi[q, 2], origin, cell, shape, 2)
+    i0, i1, j0, j1, l0, l1 = cell_range(q, q_lo, q_hi, origin, cell, shape)
     for i in range(i0, i1 + 1):
         for j in range(j0, j1 + 1):
             for l in range(l0, l1 + 1):
@@ -283,10 +289,7 @@ def _touching(q, q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, t_list, out, start, w
         t = e if every else t_list[e]
         if same and t <= q:
             continue
-        if not (q_lo[q, 0] <= t_hi[t, 0] and t_lo[t, 0] <= q_hi[q, 0] and q_lo[q, 1] <= t_hi[t, 1]
-                and t_lo[t, 1] <= q_hi[q, 1] and q_lo[q, 2] <= t_hi[t, 2] and t_lo[t, 2] <= q_hi[q, 2]):
-            continue
-        if shares_vertex(Q, q, T, t):
+        if not overlap(q_lo, q_hi, q, t_lo, t_hi, t) or shares_vertex(Q, q, T, t):
             continue
         if write:
             out[start + found] = t

@@ -22,11 +22,17 @@ import math
 import numpy as np
 
 from ._body_kernels import out_of_bodies
+from ._contact_kernels import combine, dot3, row3
 from ._kernels import _jit, prange
 
 
 SORT_BLOCKS = 8  # blocks of active contacts sorted by vertex in parallel (any number gives the same order)
 PARTS = 64  # parts of about equal entries that the per-vertex sums are split into (static: any thread count)
+
+
+@_jit()
+def row4(W, k):
+    return (W[k, 0], W[k, 1], W[k, 2], W[k, 3])
 
 
 @_jit(parallel=True)
@@ -46,15 +52,7 @@ def proximity_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterat
     done = 0
     for _ in range(iterations):
         for k in prange(K):  # the contacts below their target
-            vN = 0.0
-            r0 = r1 = r2 = 0.0
-            for j in range(4):
-                i = V[k, j]
-                r0 += W[k, j] * vbar[i, 0]
-                r1 += W[k, j] * vbar[i, 1]
-                r2 += W[k, j] * vbar[i, 2]
-            vN = N[k, 0] * r0 + N[k, 1] * r1 + N[k, 2] * r2
-            active[k] = (target[k] - vN) * h > tol
+            active[k] = (target[k] - dot3(row3(N, k), combine(row4(W, k), vbar, V, k))) * h > tol
         m = 0
         for k in range(K):  # the active ones, in increasing order
             if active[k]:
@@ -103,13 +101,8 @@ def proximity_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterat
                 if w[V[k, j]] > 0 and abs(W[k, j]) > 0:
                     c = max(c, load[V[k, j]])
             c = max(c, 1.0)
-            r0 = r1 = r2 = 0.0
-            for j in range(4):
-                v = V[k, j]
-                r0 += W[k, j] * vbar[v, 0]
-                r1 += W[k, j] * vbar[v, 1]
-                r2 += W[k, j] * vbar[v, 2]
-            vN = N[k, 0] * r0 + N[k, 1] * r1 + N[k, 2] * r2
+            r0, r1, r2 = combine(row4(W, k), vbar, V, k)
+            vN = dot3(row3(N, k), (r0, r1, r2))
             I = (target[k] - vN) / S[k] / c
             impulse[i, 0], impulse[i, 1], impulse[i, 2] = I * N[k, 0], I * N[k, 1], I * N[k, 2]
             if friction > 0:
