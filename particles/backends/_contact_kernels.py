@@ -48,6 +48,18 @@ def unit_or(v, fallback):
 
 
 @_jit()
+def normal_or(v, n, s):
+    """`v` divided by its length; where it is zero, `n`'s; where that is zero too, ``any_perpendicular(s)``.
+
+    ``unit_or(v, unit_or(n, any_perpendicular(s)))``, with the fallbacks computed only when they are used.
+    """
+    L = math.sqrt(dot3(v, v))
+    if L > 0:
+        return (v[0] / L, v[1] / L, v[2] / L)
+    return unit_or(n, any_perpendicular(s))
+
+
+@_jit()
 def any_perpendicular(d):
     """A unit vector perpendicular to `d` (e_z for zero)."""
     k = 0
@@ -103,7 +115,7 @@ def vertex_face(p, a, b, c):
     d = sub3(p, q)
     distance = math.sqrt(dot3(d, d))
     s = (e1[0] + e2[0], e1[1] + e2[1], e1[2] + e2[2])
-    normal = unit_or(d, unit_or(nrm, any_perpendicular(s)))
+    normal = normal_or(d, nrm, s)
     return distance, normal, (1.0, -w0, -w1, -w2)
 
 
@@ -129,7 +141,7 @@ def edge_edge(p1, p2, q1, q2, parallel_tol):
     distance = math.sqrt(dot3(dv, dv))
     z = 1.0 if a == 0 else 0.0
     g = (d1[0] + z * d2[0], d1[1] + z * d2[1], d1[2] + z * d2[2])
-    normal = unit_or(dv, unit_or(cross3(d1, d2), any_perpendicular(g)))
+    normal = normal_or(dv, cross3(d1, d2), g)
     return distance, normal, (1.0 - s, s, u - 1.0, -u)
 
 
