@@ -107,10 +107,34 @@ def _pairs():
 
 def _cloth_collisions():
     """The cloth collision pipeline (broad phase, proximity, the continuous test, impact zones): a small sheet
-    dropped on a ball on the floor (:func:`particles.explore.cloth_drop`), just above it."""
+    dropped on a ball on the floor (:func:`particles.explore.cloth_drop`), just above it, and a sheet folded
+    onto itself (:func:`_folded_sheet`)."""
     from ..explore import cloth_drop
 
     cloth_drop(200.0, n=8, T=0.1, h=1 / 40, drop=0.005, snapshots=2)
+    _folded_sheet()
+
+
+def _folded_sheet(n=8):
+    """Steps of an n x n sheet folded in two whose upper half (or one vertex of it) falls through the lower: the
+    self-collision stages that a sheet on a ball never reaches (the proximity iterations; without them, the
+    continuous test's passes over the vertices still moving, by a grid or, for a few, box against box)."""
+    from ..collisions import ClothCollisions, Plane, TriangleMesh
+
+    s = 1.0 / (n - 1)
+    thickness = 0.25 * s
+    i, j = np.meshgrid(np.arange(n), np.arange(n))  # particle (i, j) is vertex j n + i
+    upper = j >= n // 2
+    x0 = np.stack([i * s, np.where(upper, n - 1 - j, j) * s, 0.5 + np.where(upper, 3 * thickness, 0.0)], axis=-1)
+    x0 = x0.reshape(-1, 3)
+    fall = np.where(upper.reshape(-1, 1), [0.0, 0.0, 6 * thickness], 0.0)  # the upper half through the lower
+    poke = np.zeros_like(x0)
+    poke[(n - 2) * n + n // 2, 2] = 6 * thickness  # one vertex of it
+    h = 0.01
+    for proximity, dx in ((True, fall), (False, fall), (False, poke)):
+        guard = ClothCollisions(TriangleMesh.grid(n, n), thickness, friction=0.3, proximity=proximity,
+                                bodies=[Plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0])])
+        guard.resolve(x0, x0 - dx, -dx / h, 0.0, h)
 
 
 def _implicit():

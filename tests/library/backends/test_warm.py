@@ -21,6 +21,27 @@ def test_a_part_compiles_the_parallel_and_the_serial_copy_of_its_kernels():
 
 
 @needs_numba
+def test_the_cloth_collisions_part_runs_every_self_collision_kernel(monkeypatch):
+    """The folded sheet of the "cloth collisions" part reaches the stages a sheet on a ball does not: the proximity
+    iterations and the continuous test's searches over a few moving vertices, box against box (without them, a
+    first run of bench_cloth_fold compiled these in its timed steps: a 5 s step)."""
+    from particles.backends import cloth, using
+    from particles.backends.warm import _folded_sheet
+
+    met = set()
+
+    def pick(kernel, size):
+        met.add(kernel.py_func.__name__)
+        return kernel.serial
+
+    monkeypatch.setattr(cloth, "pick", pick)
+    with using("numba"):
+        _folded_sheet()
+    assert {"box_candidates", "touching_candidates", "proximity_rows", "proximity_impulses",
+            "first_contact_pairs", "key_rows"} <= met
+
+
+@needs_numba
 def test_parts_in_other_processes_report_each_part_once():
     """With two jobs each part runs in a process of the pool and is reported once."""
     from particles.backends.warm import warm
