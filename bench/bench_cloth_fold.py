@@ -13,7 +13,7 @@ then the median and the worst time per step and the crossing pairs at the
 worst step. ``--backend`` chooses who runs the collision stages
 (:mod:`particles.backends.cloth`) and the XPBD substeps (:mod:`particles.backends.xpbdstep`)
 ("auto": the collision stages compiled from 64 vertices, :data:`particles.backends.CLOTH_COLLISION_WEIGHT`;
-XPBD from 4096 particles);
+XPBD from 1024 particles, :data:`particles.backends.XPBD_WEIGHT`);
 ``--compare`` runs the treated sheet with NumPy and with numba side by side
 (a column each), after a warm-up that loads the compiled kernels.
 

@@ -24,7 +24,10 @@ argument (:class:`~particles.springs.Springs`,
   of the reference and never wait for a compiler. The cloth collision
   pipeline, whose work per vertex is that of dozens of force passes, counts
   its vertices :data:`CLOTH_COLLISION_WEIGHT` times: it compiles from 64
-  vertices (its contacts and verdicts are NumPy's either way);
+  vertices (its contacts and verdicts are NumPy's either way); XPBD and PBD,
+  whose step is its substeps' sweeps over the colour groups, count their
+  particles :data:`XPBD_WEIGHT` times: they compile from 1024 (a 32^2 sheet;
+  the lectures' 10^2 and 12^2 curtains stay on NumPy);
 * ``None`` (the default of every object): the global choice, set by
   :func:`set_backend` or, for a block, :func:`using`; it starts as the
   environment variable ``PARTICLES_BACKEND`` (``numpy``, ``numba`` or
@@ -141,8 +144,8 @@ import importlib.util
 import os
 import warnings
 
-__all__ = ["BACKENDS", "AUTO_MIN", "CLOTH_COLLISION_WEIGHT", "available", "check_backend", "resolve", "set_backend",
-           "get_backend", "using", "kernels_for", "compiled_step"]
+__all__ = ["BACKENDS", "AUTO_MIN", "CLOTH_COLLISION_WEIGHT", "XPBD_WEIGHT", "available", "check_backend", "resolve",
+           "set_backend", "get_backend", "using", "kernels_for", "compiled_step"]
 
 BACKENDS = ("auto", "numpy", "numba")
 
@@ -156,6 +159,13 @@ AUTO_MIN = 4096
 # bench/bench_cloth_fold.py --compare (median ms per step, NumPy / compiled): 8^2 6.3 / 1.3, 16^2 18.6 / 2.8,
 # 32^2 about 60 / 8: compiled from 64 vertices
 CLOTH_COLLISION_WEIGHT = 64
+
+# XPBD and PBD (particles.xpbd) ask "auto" with this many times their particles: a step is its substeps' sweeps
+# over the colour groups, a few dozen NumPy calls each. Measured on bench_cloth_fold's upright sheet, 10 substeps
+# (ms per step, NumPy / compiled, 2026-12-06): 8^2 3.23 / 0.54, 16^2 3.92 / 0.82, 24^2 4.93 / 0.97,
+# 32^2 6.35 / 1.89, 48^2 10.50 / 3.17, 64^2 14.32 / 3.95. Compiled from 1024 particles: a 32^2 sheet, not the
+# lectures' curtains (10^2 and 12^2), which stay bit for bit the reference's
+XPBD_WEIGHT = 4
 
 ENVIRONMENT = "PARTICLES_BACKEND"
 

@@ -84,7 +84,7 @@ References
 import numpy as np
 
 from .._checks import as_float_array, count, pinned_indices, positive_number
-from ..backends import check_backend, kernels_for
+from ..backends import XPBD_WEIGHT, check_backend, kernels_for
 from .colouring import color_constraints
 from .constraints import Attachment, ConstraintSet, Distance, IsometricBending, IsometricClamp
 
@@ -436,7 +436,7 @@ class XPBD:
         linear, :attr:`~particles.xpbd.constraints.Distance.compiled_form`); kept
         until the batches are rebuilt (:meth:`set_stiffness`).
         """
-        if self.method != "gauss-seidel" or kernels_for(self._backend, self.n) is None:
+        if self.method != "gauss-seidel" or kernels_for(self._backend, XPBD_WEIGHT * self.n) is None:
             return None
         kept = self.__dict__.get("_fused")
         if kept is not None and kept[0] is self._batches and kept[1] == d:
@@ -452,7 +452,7 @@ class XPBD:
     def _solve(self, x, x_n, hs):
         """The constraint iterations of one substep, on x (d, n) in place; returns the multipliers."""
         lams = [s.new_multipliers(len(x)) for s in self._sets]
-        fast = [kernels_for(self._backend, self.n) if isinstance(s, Distance) else None for s in self._sets]
+        fast = [kernels_for(self._backend, XPBD_WEIGHT * self.n) if isinstance(s, Distance) else None for s in self._sets]
         for _ in range(self.iterations):  # a loop over iterations
             for s, batches, lam, kernels in zip(self._sets, self._batches, lams, fast):  # a loop over the few sets
                 for b in batches:  # Gauss-Seidel: one colour at a time (Jacobi: one batch)

@@ -48,6 +48,24 @@ def test_the_grader_workers_never_compile():
 
 
 @needs_numba
+@pytest.mark.parametrize("side, compiled", [(31, False), (32, True)])
+def test_auto_compiles_xpbd_from_1024_particles(monkeypatch, side, compiled):
+    """"auto" runs XPBD's substeps compiled from 1024 particles (a 32 x 32 sheet), NumPy below (31 x 31)."""
+    from particles.backends.xpbdstep import CompiledSubstep  # noqa: PLC0415
+    from particles.massspring import cloth  # noqa: PLC0415
+    from particles.xpbd import XPBD  # noqa: PLC0415
+
+    monkeypatch.delenv("PARTICLES_BACKEND", raising=False)
+    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
+    calls = []
+    original = CompiledSubstep.substep
+    monkeypatch.setattr(CompiledSubstep, "substep", lambda *a, **k: calls.append(1) or original(*a, **k))
+    c = cloth(side, side, scaling="physical")
+    c.run(0.01, 0.01, method=XPBD.from_system(c, substeps=2, backend="auto"))
+    assert backends.XPBD_WEIGHT * 1024 == backends.AUTO_MIN
+    assert len(calls) == (2 if compiled else 0)
+
+
 @needs_numba
 @pytest.mark.parametrize("side, compiled", [(7, False), (8, True)])
 def test_auto_compiles_the_cloth_collisions_from_64_vertices(monkeypatch, side, compiled):
