@@ -103,6 +103,31 @@ def test_closest_points_agree(edge):
 
 
 @pytest.mark.parametrize("edge", [False, True])
+def test_closest_points_at_zero_distance_take_numpys_fallback_normals(edge):
+    """Pairs that touch: the normal falls back to the face's (the edges' cross product), and for a flat
+    triangle (parallel edges) to a perpendicular, as in proximity's kernels; a unit vector in every case."""
+    if edge:  # crossing edges; collinear overlapping edges; a point-like edge on another
+        pairs = [[[0, 0, 0], [1, 0, 0], [0.5, -1, 0], [0.5, 1, 0]],
+                 [[0, 0, 0], [1, 1, 0], [0.5, 0.5, 0], [2, 2, 0]],
+                 [[0.5, 0.5, 0], [0.5, 0.5, 0], [0, 0, 0], [1, 1, 0]]]
+    else:  # a vertex inside a face; a vertex on a flat (collinear) triangle; one at a corner
+        pairs = [[[0.2, 0.2, 0], [0, 0, 0], [1, 0, 0], [0, 1, 0]],
+                 [[0.5, 0.5, 0], [0, 0, 0], [1, 1, 0], [2, 2, 0]],
+                 [[0, 0, 0], [0, 0, 0], [1, 0, 0], [0, 1, 0]]]
+    x = np.array(pairs, dtype=float).reshape(-1, 3)
+    rows = np.arange(len(x)).reshape(-1, 4)
+    p = x[rows]
+    ref = (edge_edge_kernel if edge else vertex_face_kernel)(p[:, 0], p[:, 1], p[:, 2], p[:, 3])
+    distance, normal, weights = cloth.cloth_closest(x, rows, edge, PARALLEL)
+    assert np.all(distance == 0) and np.all(ref.distance == 0)
+    np.testing.assert_allclose(normal, ref.normal, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(weights, ref.weights, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(normal, axis=1), 1.0, rtol=0, atol=1e-12)
+    assert abs(normal[0, 2]) == 1.0  # the face's normal, the edges' cross product: e_z
+    assert normal[1, 2] == 0.0  # perpendicular to the line (1, 1, 0), in the plane z = 0
+
+
+@pytest.mark.parametrize("edge", [False, True])
 def test_first_contacts_give_the_same_verdicts(edge):
     """The compiled cubic finds the same colliding pairs, times, normals and weights as ccd.first_contacts."""
     mesh, x, dx = crumpled(6, noise=0.03)
