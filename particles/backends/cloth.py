@@ -30,7 +30,7 @@ import numpy as np
 from ._body_kernels import body_vertices, low_edge_samples
 from ._broad_kernels import box_candidates, corner_bounds, key_rows, touching_candidates
 from ._contact_kernels import closest_pairs, first_contact_pairs, kept_rows, proximity_rows
-from ._jacobi_kernels import PARTS, SORT_BLOCKS, proximity_impulses
+from ._jacobi_kernels import BLOCKS, proximity_impulses
 from ._kernels import pick
 
 __all__ = ["cloth_candidates", "cloth_candidate_rows", "cloth_closest", "cloth_proximity", "cloth_first_contacts",
@@ -41,6 +41,10 @@ _EMPTY_MASK = np.zeros(0, dtype=np.bool_)
 # a box query walks the cells its box covers and tests their boxes: the work of about this many items of pick's
 # threshold (a spring's force); 1k vertices or edges already pay for the threads (a 32^2 sheet: 2 ms a search)
 QUERY_WEIGHT = 16
+
+# the Jacobi iterations sum each vertex's terms in slices of at least this many active contacts (at most
+# _jacobi_kernels.BLOCKS, each on one thread): below twice as many, in one slice, in np.bincount's order
+JACOBI_PART_MIN = 4096
 
 # a grid search costs about as much as this many box tests per query and target (building the grid and its
 # tables, walking the cells): a masked search that needs fewer tests element against element makes none
@@ -208,13 +212,13 @@ def cloth_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterations
     k, n = len(V), len(vbar)
     kinds, rows = _NO_BODIES if bodies is None else bodies
     touched, active = np.zeros(k, dtype=np.bool_), np.zeros(k, dtype=np.bool_)
-    order, impulse = np.empty(k, dtype=np.int64), np.empty((k, 3))
-    load, ptr, entry = np.empty(n), np.empty(n + 1, dtype=np.int64), np.empty(4 * k, dtype=np.int64)
-    counts, parts = np.empty((SORT_BLOCKS, n), dtype=np.int64), np.empty(PARTS + 1, dtype=np.int64)
+    order, impulse, load = np.empty(k, dtype=np.int64), np.empty((k, 3)), np.empty(n)
+    part_load, part_hit = np.empty((BLOCKS, n)), np.empty((BLOCKS, n), dtype=np.bool_)
+    part_vel = np.empty((BLOCKS, n, 3))
     done = pick(proximity_impulses, max(k, n))(vbar, np.ascontiguousarray(x0), V, W, N, S, target, w, float(h),
                                                  float(tol), float(friction), int(iterations), float(thickness),
-                                                 kinds, rows, touched, active, order, impulse, load, ptr, entry,
-                                                 counts, parts)
+                                                 kinds, rows, int(JACOBI_PART_MIN), touched, active, order, impulse,
+                                                 load, part_load, part_hit, part_vel)
     return done, touched, active
 
 

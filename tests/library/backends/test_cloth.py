@@ -193,9 +193,12 @@ BODIES = {"none": [], "floor": [Plane([0, 0, -0.02], [0, 0, 1.0])],
           "moving (NumPy's pass)": [MovingSurface(Plane([0, 0, -0.02], [0, 0, 1.0]), velocity=[0.0, 0.1, 0.0])]}
 
 
+@pytest.mark.parametrize("part_min", [cloth.JACOBI_PART_MIN, 16])
 @pytest.mark.parametrize("bodies", list(BODIES))
-def test_the_jacobi_iterations_agree_with_numpy(bodies):
-    """The compiled proximity iterations, bodies' pass included, change vbar as ClothCollisions' NumPy ones do."""
+def test_the_jacobi_iterations_agree_with_numpy(bodies, part_min, monkeypatch):
+    """The compiled proximity iterations, bodies' pass included, change vbar as ClothCollisions' NumPy ones do,
+    with each vertex's terms summed in one slice of the active contacts or in slices of 16."""
+    monkeypatch.setattr(cloth, "JACOBI_PART_MIN", part_min)
     mesh, x, dx = crumpled(8)
     dx[:, 2] -= 0.04  # towards the bodies
     out = []
@@ -210,6 +213,7 @@ def test_the_jacobi_iterations_agree_with_numpy(bodies):
     assert ta == tb > 10 and k > ta
     assert np.abs(va - dx / H).max() > 0.1  # the impulses changed something
     np.testing.assert_allclose(vb, va, rtol=0, atol=1e-12 * np.abs(va).max())
+    assert part_min == cloth.JACOBI_PART_MIN or k > 2 * part_min  # the small slices were used
 
 
 SMALL_BALL = [Sphere([0.5 + 0.5 / (N - 1), 0.5 + 0.3 / (N - 1), 0.0], 0.03)]  # between two vertices of the sheet
@@ -279,12 +283,14 @@ def test_same_bits_on_one_and_two_threads():
 
 
 def test_the_jacobi_iterations_give_the_same_bits_on_one_and_two_threads(monkeypatch):
-    """The proximity iterations (sorted in blocks, summed in parts) give the same bits on one thread and on two."""
+    """The proximity iterations (each vertex's terms summed in slices of the active contacts) give the same bits
+    on one thread and on two."""
     if numba.config.NUMBA_NUM_THREADS < 2:
         pytest.skip("one thread only")
     import particles.backends._kernels as kernels  # noqa: PLC0415
 
     monkeypatch.setattr(kernels, "PARALLEL_MIN", 0)  # every loop parallel, however small
+    monkeypatch.setattr(cloth, "JACOBI_PART_MIN", 16)  # the sums in slices
     mesh, x, dx = crumpled(7, n=40)
     dx[:, 2] -= 0.04
     vbar = np.ascontiguousarray(dx / H)
