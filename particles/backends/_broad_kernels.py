@@ -169,7 +169,7 @@ def overlap(q_lo, q_hi, q, t_lo, t_hi, t):
     """Whether the closed boxes of query `q` and target `t` overlap (compared exactly, as NumPy does).
 
     All six comparisons are made and combined with ``&``, without branches: most boxes a query walks miss it
-    along some axis, unpredictably, and a branch per comparison cost twice the time of the whole test.
+    along some axis, unpredictably, and with a branch per comparison the fold's largest search took twice as long.
     """
     return ((q_lo[q, 0] <= t_hi[t, 0]) & (t_lo[t, 0] <= q_hi[q, 0]) & (q_lo[q, 1] <= t_hi[t, 1])
             & (t_lo[t, 1] <= q_hi[q, 1]) & (q_lo[q, 2] <= t_hi[t, 2]) & (t_lo[t, 2] <= q_hi[q, 2]))
