@@ -13,6 +13,18 @@ from particles.springs import Springs
 from .helpers import needs_numba
 
 
+def fresh_environment(monkeypatch):
+    """Neither PARTICLES_BACKEND nor NUMBA_DISABLE_JIT set: "auto" decides by size alone."""
+    monkeypatch.delenv("PARTICLES_BACKEND", raising=False)
+    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
+
+
+def spy(monkeypatch, owner, name, calls):
+    """Replace ``owner.name`` by a wrapper that appends `name` to `calls`, then calls the original."""
+    original = getattr(owner, name)
+    monkeypatch.setattr(owner, name, lambda *a, **k: calls.append(name) or original(*a, **k))
+
+
 def test_import_particles_does_not_import_numba():
     """numba is loaded only by a force pass that uses it, never by ``import particles`` or the NumPy backend."""
     code = ("import sys, numpy as np, particles; from particles.springs import Springs; "
@@ -24,8 +36,7 @@ def test_import_particles_does_not_import_numba():
 
 def test_auto_is_numpy_for_small_problems_and_under_particles_backend_numpy(monkeypatch):
     """"auto" compiles only from AUTO_MIN particles, never with PARTICLES_BACKEND=numpy or NUMBA_DISABLE_JIT=1."""
-    monkeypatch.delenv("PARTICLES_BACKEND", raising=False)
-    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
+    fresh_environment(monkeypatch)
     assert backends.resolve("auto", backends.AUTO_MIN - 1) == "numpy"
     assert backends.resolve("numpy", 10**9) == "numpy"
     expected = "numba" if "numba" in backends.available() else "numpy"
@@ -55,11 +66,9 @@ def test_auto_compiles_xpbd_from_1024_particles(monkeypatch, side, compiled):
     from particles.massspring import cloth  # noqa: PLC0415
     from particles.xpbd import XPBD  # noqa: PLC0415
 
-    monkeypatch.delenv("PARTICLES_BACKEND", raising=False)
-    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
+    fresh_environment(monkeypatch)
     calls = []
-    original = CompiledSubstep.substep
-    monkeypatch.setattr(CompiledSubstep, "substep", lambda *a, **k: calls.append(1) or original(*a, **k))
+    spy(monkeypatch, CompiledSubstep, "substep", calls)
     c = cloth(side, side, scaling="physical")
     c.run(0.01, 0.01, method=XPBD.from_system(c, substeps=2, backend="auto"))
     assert backends.XPBD_WEIGHT * 1024 == backends.AUTO_MIN
@@ -75,12 +84,10 @@ def test_auto_compiles_the_cloth_collisions_from_64_vertices(monkeypatch, side, 
     from particles.backends import compiled as kernels  # noqa: PLC0415
     from particles.collisions import ClothCollisions, Plane, TriangleMesh  # noqa: PLC0415
 
-    monkeypatch.delenv("PARTICLES_BACKEND", raising=False)
-    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
+    fresh_environment(monkeypatch)
     calls = []
     for name in ("cloth_candidate_rows", "cloth_proximity", "cloth_impulses", "cloth_first_contacts"):
-        original = getattr(kernels, name)
-        monkeypatch.setattr(kernels, name, lambda *a, _f=original, _n=name, **k: calls.append(_n) or _f(*a, **k))
+        spy(monkeypatch, kernels, name, calls)
     u, v = np.meshgrid(np.linspace(0, 0.02, side), np.linspace(0, 0.02, side))  # spacing < thickness: contacts
     x0 = np.stack([u.ravel(), v.ravel(), 0.004 * np.sin(40 * u.ravel())], axis=1)
     x1 = x0 + [0.0, 0.0, -0.01]
