@@ -19,6 +19,7 @@ XPBD from 1024 particles, :data:`particles.backends.XPBD_WEIGHT`);
 
     python bench/bench_cloth_fold.py            # 64^2 (with --no-baseline, 40 s on a quiet machine)
     python bench/bench_cloth_fold.py --n 32 --compare   # NumPy against numba
+    python bench/bench_cloth_fold.py --xpbd-sizes       # XPBD alone per size: where "auto" compiles it
 """
 
 import argparse
@@ -98,6 +99,27 @@ def report(label, runs, window=0.25):
     return {k: summary(rows) for k, rows in runs.items()}
 
 
+def xpbd_sizes(sides=(8, 16, 24, 32, 48, 64), rounds=2, steps=20):
+    """The sheet's XPBD steps alone (10 substeps, no collisions), NumPy against compiled, per size: the
+    measurements behind :data:`particles.backends.XPBD_WEIGHT` (best of `rounds` alternating runs)."""
+    from particles.backends import AUTO_MIN, XPBD_WEIGHT
+
+    print(f"\nXPBD alone, 10 substeps, ms per step (auto compiles from {AUTO_MIN // XPBD_WEIGHT} particles)")
+    print(f"{'sheet':>8} {'particles':>10} {'NumPy':>8} {'compiled':>9} {'ratio':>6}")
+    for n in sides:  # a loop over the few sizes
+        best = {}
+        for _ in range(rounds):  # alternating rounds
+            for backend in ("numpy", "numba"):
+                c = upright_sheet(n)
+                solver = XPBD.from_system(c, substeps=10, backend=backend)
+                c.run(2 * H, H, method=solver)
+                t0 = time.perf_counter()
+                c.run(c.t + steps * H, H, method=solver)
+                best[backend] = min(best.get(backend, np.inf), (time.perf_counter() - t0) / steps)
+        print(f"{f'{n}^2':>8} {n * n:>10} {1e3 * best['numpy']:>8.2f} {1e3 * best['numba']:>9.2f} "
+              f"{best['numpy'] / best['numba']:>6.1f}")
+
+
 def warm_up():
     """Load (or, with a cold cache, compile) the kernels before the timing: the collision pipeline's and
     XPBD's (:func:`particles.backends.warm.warm`), then one step of a small sheet.
@@ -119,7 +141,13 @@ def main(argv=None):
                         help="who runs the collision stages and the XPBD substeps (default auto)")
     parser.add_argument("--compare", action="store_true", help="the treated sheet with NumPy and with numba")
     parser.add_argument("--no-baseline", action="store_true", help="skip the floor-only run")
+    parser.add_argument("--xpbd-sizes", action="store_true",
+                        help="only the sheet's XPBD steps, NumPy against compiled, from 8^2 to 64^2")
     args = parser.parse_args(argv)
+    if args.xpbd_sizes:
+        warm_up()
+        xpbd_sizes()
+        return
     print(f"{args.n}^2 sheet ({2 * (args.n - 1) ** 2} triangles), {args.seconds:g} s, h = {1e3 * H:g} ms, "
           f"load average {os.getloadavg()[0]:.2f}")
     backends = ["numpy", "numba"] if args.compare else [args.backend]

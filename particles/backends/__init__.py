@@ -161,10 +161,10 @@ AUTO_MIN = 4096
 CLOTH_COLLISION_WEIGHT = 64
 
 # XPBD and PBD (particles.xpbd) ask "auto" with this many times their particles: a step is its substeps' sweeps
-# over the colour groups, a few dozen NumPy calls each. Measured on bench_cloth_fold's upright sheet, 10 substeps
-# (ms per step, NumPy / compiled, 2026-12-06): 8^2 3.23 / 0.54, 16^2 3.92 / 0.82, 24^2 4.93 / 0.97,
-# 32^2 6.35 / 1.89, 48^2 10.50 / 3.17, 64^2 14.32 / 3.95. Compiled from 1024 particles: a 32^2 sheet, not the
-# lectures' curtains (10^2 and 12^2), which stay bit for bit the reference's
+# over the colour groups, a few dozen NumPy calls each. `python bench/bench_cloth_fold.py --xpbd-sizes` (the
+# fold's sheet, 10 substeps, ms per step, NumPy / compiled, 2026-12-06): 8^2 1.92 / 0.33, 16^2 2.48 / 0.50,
+# 24^2 3.46 / 0.77, 32^2 4.46 / 1.17, 48^2 8.28 / 2.32, 64^2 12.22 / 3.97. Compiled from 1024 particles: a 32^2
+# sheet, not the lectures' curtains (10^2 and 12^2), which stay bit for bit the reference's
 XPBD_WEIGHT = 4
 
 ENVIRONMENT = "PARTICLES_BACKEND"
