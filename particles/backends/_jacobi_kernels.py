@@ -3,7 +3,8 @@
 Imported only by :mod:`particles.backends.cloth`. :func:`proximity_impulses` runs the loop of
 ``ClothCollisions._proximity`` (:mod:`particles.collisions.pipeline`, ``method="jacobi"``) in one call:
 each iteration finds the contacts below their target normal velocity, sums each free vertex's load over
-those, gives each an impulse divided by the largest load at its free vertices (with Coulomb friction) and
+those, gives each an impulse divided by the largest load at its free vertices (from the second iteration on,
+by that load over `relaxation`, never by less than 1; with Coulomb friction) and
 adds the impulses to the vertices; then every free vertex of those contacts is moved out of the bodies
 (``BodyStage._bodies`` without the edge samples, :func:`particles.backends._body_kernels.out_of_bodies`),
 when the bodies are primitives at rest (:mod:`particles.backends._collider_kernels`' rows). Otherwise the
@@ -39,12 +40,14 @@ def row4(W, k):
 
 
 @_jit(parallel=True)
-def proximity_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterations, thickness, kinds, rows,
-                       part_min, touched, active, order, impulse, load, part_load, part_hit, part_vel):
+def proximity_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, relaxation, start, iterations, thickness,
+                       kinds, rows, part_min, touched, active, order, impulse, load, part_load, part_hit, part_vel):
     """Up to `iterations` Jacobi iterations of the proximity impulses on `vbar` (n, 3), in place.
 
     `V`, `W`, `N`, `S`, `target` are the contacts' vertices (k, 4), weights (k, 4), normals (k, 3),
-    inverse effective masses (k,) and target normal velocities (k,); `w` the inverse masses (n,). After
+    inverse effective masses (k,) and target normal velocities (k,); `w` the inverse masses (n,). From
+    the iteration numbered 1 on (counting `start` earlier ones), a contact's divisor is its largest load over
+    `relaxation`, at least 1. After
     each iteration the free vertices of its active contacts are moved out of the bodies `kinds`, `rows`
     (none when empty). The per-vertex sums run in slices of at least `part_min` active contacts (at most
     :data:`BLOCKS`). `touched` (k,) is set where a contact got an impulse, `active` (k,) holds the last
@@ -56,7 +59,8 @@ def proximity_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterat
     span = (K + BLOCKS - 1) // BLOCKS
     found = np.zeros(BLOCKS + 1, dtype=np.int64)
     done = 0
-    for _ in range(iterations):
+    for it in range(iterations):
+        share = relaxation if start + it > 0 else 1.0  # the first iteration plain averaging, the later ones relaxed
         for b in prange(BLOCKS):  # the contacts below their target, counted in blocks of contacts
             f = 0
             for k in range(b * span, min(K, (b + 1) * span)):
@@ -101,7 +105,7 @@ def proximity_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterat
             for j in range(4):
                 if w[V[k, j]] > 0 and abs(W[k, j]) > 0:
                     c = max(c, load[V[k, j]])
-            c = max(c, 1.0)
+            c = max(c / share, 1.0)
             r0, r1, r2 = combine(row4(W, k), vbar, V, k)
             vN = dot3(row3(N, k), (r0, r1, r2))
             I = (target[k] - vN) / S[k] / c

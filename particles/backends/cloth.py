@@ -172,7 +172,8 @@ def cloth_first_contacts(x0, dx, rows, edge, eta, ftol, bisections, parallel_tol
 _NO_BODIES = (np.zeros(0, dtype=np.int64), np.zeros((0, 13)))
 
 
-def cloth_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterations, thickness, bodies=None):
+def cloth_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterations, thickness, bodies=None,
+                   relaxation=1.0, start=0):
     """Jacobi iterations of the proximity impulses on `vbar` (n, 3), in place: ``ClothCollisions._proximity``.
 
     Parameters
@@ -199,6 +200,11 @@ def cloth_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterations
     bodies : tuple (kinds, rows), optional
         Bodies at rest as :func:`particles.backends.fixes.surface_rows` gives them: after each iteration
         the free vertices of its active contacts are moved out of them.
+    relaxation : float
+        Over-relaxation (>= 1): from the pipeline's second iteration on, a contact's impulse is divided
+        by ``max(load / relaxation, 1)`` instead of ``max(load, 1)`` (``ClothCollisions``' `relaxation`).
+    start : int
+        Number of iterations the pipeline already made (0: this call's first iteration averages plainly).
 
     Returns
     -------
@@ -216,7 +222,9 @@ def cloth_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterations
     part_load, part_hit = np.empty((BLOCKS, n)), np.empty((BLOCKS, n), dtype=np.bool_)
     part_vel = np.empty((BLOCKS, n, 3))
     done = pick(proximity_impulses, max(k, n))(vbar, np.ascontiguousarray(x0), V, W, N, S, target, w, float(h),
-                                                 float(tol), float(friction), int(iterations), float(thickness),
+                                                 float(tol), float(friction), float(relaxation), int(start),
+                                                 int(iterations),
+                                                 float(thickness),
                                                  kinds, rows, int(JACOBI_PART_MIN), touched, active, order, impulse,
                                                  load, part_load, part_hit, part_vel)
     return done, touched, active

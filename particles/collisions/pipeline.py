@@ -32,7 +32,10 @@ move on straight lines ``x0 + t h vbar`` within the step):
    are solved together by Jacobi iterations (each followed by the bodies'
    vertex pass, so that a sheet resting on another on a floor is held by
    both); each impulse is divided by the largest load ``sum |w_j|`` of the
-   active contacts at its free vertices (an average that keeps momentum),
+   active contacts at its free vertices (an average that keeps momentum;
+   from the second iteration on, by that load over ``relaxation``, at least
+   1, because what is still active then is a stack of conflicting layers,
+   which plain averaging moves by one layer per iteration),
    or, with ``method="gauss-seidel"``, contacts go one vertex-disjoint
    colour group at a time. Pairs closer than ``rest_distance`` in the rest
    shape (neighbours on the same sheet) never repel, and an edge-edge pair
@@ -221,6 +224,16 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
     tol : float
         The proximity iterations stop when no pair would end more than
         ``tol thickness`` short of its target (default 0.01).
+    relaxation : float
+        Over-relaxation of the Jacobi iterations (>= 1, default 2): from the
+        second iteration on, a contact's impulse is divided by the largest
+        number of active contacts at its vertices over `relaxation` (never by
+        less than 1) instead of by that number. The first iteration averages
+        plainly, so an isolated contact or two redundant ones (a vertex above
+        the edge between two faces) end at their target without rebounding;
+        what is still active after it is a conflict (layers stacked closer
+        than the thickness), which plain averaging moves by one layer per
+        iteration. 1 is plain averaging throughout.
     backend : {None, "auto", "numpy", "numba"}
         Who runs the broad phase, the proximity tests and Jacobi impulses, and the continuous test
         (:mod:`particles.backends`; :mod:`particles.backends.cloth`: the same contacts and verdicts);
@@ -252,7 +265,7 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
 
     def __init__(self, mesh, thickness, m=1.0, *, pinned=(), friction=0.0, bodies=(), ccd=True, zones=True,
                  proximity=True, iterations=50, ccd_iterations=10, zone_iterations=100, x_rest=None, rest_distance=None,
-                 repulsion=0.1, separation=None, eta=None, method="jacobi", tol=0.01, backend=None):
+                 repulsion=0.1, separation=None, eta=None, method="jacobi", tol=0.01, relaxation=2.0, backend=None):
         if not isinstance(mesh, TriangleMesh):
             raise ValueError(f"mesh must be a particles.collisions.mesh.TriangleMesh, got {type(mesh).__name__}")
         self.mesh = mesh
@@ -291,6 +304,9 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
         if method not in ("gauss-seidel", "jacobi"):
             raise ValueError(f"method must be 'gauss-seidel' or 'jacobi', got {method!r}")
         self.method = method
+        self.relaxation = positive_number(relaxation, "relaxation")
+        if self.relaxation < 1:
+            raise ValueError(f"relaxation must be at least 1 (1: plain averaging), got {relaxation!r}")
         self.last = ClothCollisionResult()
         self.history = []
         self.backend = check_backend(backend)

@@ -21,7 +21,7 @@ class ProximityStage:
     """The proximity stage of :class:`~particles.collisions.pipeline.ClothCollisions` (a base class of it).
 
     It uses its ``n``, ``w``, ``thickness``, ``friction``, ``repulsion``, ``rest_distance``, ``x_rest``,
-    ``iterations``, ``method``, ``tol``, ``backend``, ``bodies``, ``candidates``, ``_bodies``,
+    ``iterations``, ``relaxation``, ``method``, ``tol``, ``backend``, ``bodies``, ``candidates``, ``_bodies``,
     ``_compiled_bodies``, ``_scatter``, ``_relative`` and ``_effective``.
     """
 
@@ -66,7 +66,9 @@ class ProximityStage:
         Gauss-Seidel: one vertex-disjoint colour group of contacts at a time,
         each seeing the impulses of the groups before it; Jacobi: all at once,
         each impulse divided by the largest number of active contacts at its
-        free vertices. Returns how many pairs got an impulse.
+        free vertices (from the second iteration on, by that number over
+        ``relaxation``, and never by less than 1). Returns how many pairs got
+        an impulse.
         """
         if contacts is None or not len(contacts[0]):
             return 0
@@ -80,13 +82,14 @@ class ProximityStage:
             return self._compiled_proximity(fast, V, W, N, S, target, x0, vbar, t, h)
         touched = np.zeros(len(V), dtype=bool)
         free = self.w[V] > 0
-        for _ in range(self.iterations):  # a loop over iterations
+        for it in range(self.iterations):  # a loop over iterations
             if groups is None:
                 k = self._active(vbar, V, W, N, target, h)
                 if len(k):
                     share = np.where(free[k], np.abs(W[k]), 0.0)  # each free vertex's part in each contact
                     load = np.bincount(V[k].ravel(), share.ravel(), minlength=self.n)
-                    c = np.maximum(np.max(np.where(share > 0, load[V[k]], 0.0), axis=1), 1.0)
+                    relaxed = self.relaxation if it > 0 else 1.0  # the first iteration plain averaging
+                    c = np.maximum(np.max(np.where(share > 0, load[V[k]], 0.0), axis=1) / relaxed, 1.0)
                     self._impulses(vbar, V[k], W[k], N[k], S[k], target[k], c, disjoint=False)
             else:
                 k = []
@@ -110,11 +113,11 @@ class ProximityStage:
         rows = self._compiled_bodies()[1]
         args = (vbar, x0, V, W, N, S, target, self.w, h, self.tol * self.thickness, self.friction)
         if rows is not None or not self.bodies:
-            _, touched, _ = fast.cloth_impulses(*args, self.iterations, self.thickness, rows)
+            _, touched, _ = fast.cloth_impulses(*args, self.iterations, self.thickness, rows, self.relaxation)
             return int(touched.sum())
         touched = np.zeros(len(V), dtype=bool)
-        for _ in range(self.iterations):  # one compiled iteration, then the NumPy bodies' pass
-            done, hit, active = fast.cloth_impulses(*args, 1, self.thickness)
+        for it in range(self.iterations):  # one compiled iteration, then the NumPy bodies' pass
+            done, hit, active = fast.cloth_impulses(*args, 1, self.thickness, None, self.relaxation, it)
             if not done:
                 break
             touched |= hit

@@ -250,6 +250,28 @@ def test_the_jacobi_iterations_stop_when_no_contact_is_active():
     assert vbar.tobytes() == before.tobytes()
 
 
+def test_jacobi_iterations_one_call_at_a_time_give_the_bits_of_one_call():
+    """The pipeline calls the kernel one iteration at a time when the bodies are not primitives at rest:
+    with `start` counting the iterations made, the over-relaxation starts where one call of all of them
+    starts it, and the bits are the same."""
+    mesh, x, dx = crumpled(8)
+    dx[:, 2] -= 0.04
+    vbar = np.ascontiguousarray(dx / H)
+    V, W, N_, D = ClothCollisions(mesh, 0.03, backend="numpy")._proximity_contacts(x, vbar, H)
+    S, target, w = np.sum(W ** 2, axis=1), np.where(D < 0.03, 0.1 * (0.03 - D), 0.03 - D) / H, np.ones(mesh.n)
+    args = (x, V, W, N_, S, target, w, H, 3e-4, 0.3)
+    whole = vbar.copy()
+    done, _, _ = cloth.cloth_impulses(whole, *args, 12, 0.03, None, 2.0)
+    steps = vbar.copy()
+    for it in range(12):  # a loop over iterations, as the pipeline's
+        cloth.cloth_impulses(steps, *args, 1, 0.03, None, 2.0, it)
+    assert done > 2  # several iterations, relaxed after the first
+    assert steps.tobytes() == whole.tobytes()
+    plain = vbar.copy()
+    cloth.cloth_impulses(plain, *args, 12, 0.03, None, 1.0)
+    assert np.abs(plain - whole).max() > 1e-3  # the relaxation changes the outcome
+
+
 def test_same_bits_on_one_and_two_threads():
     """The compiled stages give the same bits on one thread and on two (fixed partitions, no atomics)."""
     if numba.config.NUMBA_NUM_THREADS < 2:
@@ -303,7 +325,7 @@ def test_the_jacobi_iterations_give_the_same_bits_on_one_and_two_threads(monkeyp
         for threads in (1, 2):
             numba.set_num_threads(threads)
             v = vbar.copy()
-            done, touched, _ = cloth.cloth_impulses(v, x, V, W, N_, S, target, w, H, 3e-4, 0.3, 30, 0.03, rows)
+            done, touched, _ = cloth.cloth_impulses(v, x, V, W, N_, S, target, w, H, 3e-4, 0.3, 30, 0.03, rows, 2.0)
             out.append((done, touched.sum(), v.tobytes()))
     finally:
         numba.set_num_threads(before)

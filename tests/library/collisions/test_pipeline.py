@@ -162,6 +162,69 @@ def test_proximity_impulses_conserve_momentum_in_a_crowd(method):
     np.testing.assert_allclose(momentum(system.m, v1), momentum(system.m, v), atol=1e-12)
 
 
+def stacked_layers(layers=6, n=5, size=0.1, gap=0.003):
+    """`layers` flat n x n grids `gap` apart (every other one shifted), as one mesh and its positions."""
+    g = np.linspace(0.0, size, n)
+    X, Y = np.meshgrid(g, g, indexing="ij")
+    flat = np.column_stack([X.ravel(), Y.ravel(), np.zeros(n * n)])
+    cell = size / (n - 1)
+    x = np.concatenate([flat + [(i % 2) * cell / 2, (i % 2) * cell / 3, i * gap] for i in range(layers)])
+    faces = TriangleMesh.grid(n, n).faces
+    return TriangleMesh(np.concatenate([faces + i * n * n for i in range(layers)]), layers * n * n), x
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_over_relaxed_jacobi_separates_a_stack_faster(backend):
+    """Six layers at rest, 0.3 thickness apart, are pushed apart by the proximity impulses alone. Plain
+    averaging moves such a conflict by about one layer per iteration; with the default over-relaxation (2),
+    10 iterations give every adjacent pair a larger share of its target speed, the innermost about 1.6 times
+    plain averaging's (measured: 0.45 against 0.28); both backends give the same velocities."""
+    pytest.importorskip("numba") if backend == "numba" else None
+    h, thickness = 0.01, 0.01
+    want = 0.1 * (thickness - 0.003) / h  # each pair's target: the default repulsion of the overlap per step
+    share = {}
+    for relaxation in (1.0, 2.0):
+        mesh, x0 = stacked_layers()
+        cc = ClothCollisions(mesh, thickness, m=0.01, ccd=False, zones=False, iterations=10, tol=0.0,
+                             relaxation=relaxation, backend=backend)
+        x, v = cc.resolve(x0, x0, np.zeros_like(x0), 0.0, h)
+        share[relaxation] = np.diff(v[:, 2].reshape(6, -1).mean(axis=1)) / want
+    assert np.all(share[2.0] > share[1.0] + 0.1)
+    assert share[2.0].min() > 1.4 * share[1.0].min()
+    assert np.all(share[2.0] < 1.0)  # none pushed past its target speed
+
+
+@pytest.mark.parametrize("options", [{"pinned": [0, 1, 2]}, {}])
+def test_over_relaxation_gives_no_rebound_to_a_lone_contact(options):
+    """One vertex falling on a triangle is one contact: its divisor is never below 1, so the first iteration
+    ends it at its target whatever the relaxation (the same bits with 1, 2 and 4): the vertex does not bounce."""
+    out = []
+    for relaxation in (1.0, 2.0, 4.0):
+        cc, x0, x1, v1, h = falling_vertex(ccd=False, zones=False, relaxation=relaxation, **options)
+        out.append(cc.resolve(x0, x1, v1, 0.0, h))
+    for x, v in out[1:]:
+        assert x.tobytes() == out[0][0].tobytes() and v.tobytes() == out[0][1].tobytes()
+    x, v = out[0]
+    assert v[3, 2] - v[:3, 2].mean() <= 1e-12  # approaching no faster than the target allows, not rebounding
+
+
+def test_over_relaxation_gives_no_rebound_to_redundant_contacts():
+    """A vertex falling onto the edge between two pinned faces meets both with the same normal: the first
+    iteration gives each half, and the relaxation changes nothing."""
+    mesh = TriangleMesh([[0, 1, 2], [1, 3, 2]], n=5)
+    x0 = np.array([[0.0, 0, 0], [1.0, 0, 0], [0.0, 1, 0], [1.0, 1, 0], [0.5, 0.5, 0.01]])
+    x1 = x0.copy()
+    x1[4, 2] -= 0.02
+    out = []
+    for relaxation in (1.0, 2.0):
+        cc = ClothCollisions(mesh, thickness=0.005, pinned=[0, 1, 2, 3], ccd=False, zones=False,
+                             relaxation=relaxation)
+        out.append(cc.resolve(x0, x1, (x1 - x0) / 0.01, 0.0, 0.01))
+        assert cc.last.proximity == 2
+    assert out[0][1].tobytes() == out[1][1].tobytes()
+    assert out[1][1][4, 2] == pytest.approx((0.005 - 0.01) / 0.01)  # ends at the thickness, not above it
+
+
 # ------------------------------------------------------------------ simulations
 THICKNESS_TOL = 0.5
 """Stated tolerance: proximity keeps non-neighbour pairs at least (1 - THICKNESS_TOL) thickness apart in these runs."""
@@ -299,6 +362,10 @@ def test_bad_input_is_refused():
         ClothCollisions(mesh, 0.01, repulsion=2.0)
     with pytest.raises(ValueError, match="iterations must be an integer >= 1"):
         ClothCollisions(mesh, 0.01, iterations=0)
+    with pytest.raises(ValueError, match=r"relaxation must be at least 1 \(1: plain averaging\), got 0.5"):
+        ClothCollisions(mesh, 0.01, relaxation=0.5)
+    with pytest.raises(ValueError, match="relaxation must be a positive finite number"):
+        ClothCollisions(mesh, 0.01, relaxation=float("nan"))
     cc = ClothCollisions(mesh, 0.01)
     with pytest.raises(ValueError, match=r"x1 must have shape \(3, 3\)"):
         cc.resolve(TRI, TRI[:2], TRI, 0.0, 0.01)
