@@ -223,10 +223,9 @@ def cloth_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterations
     part_vel = np.empty((BLOCKS, n, 3))
     done = pick(proximity_impulses, max(k, n))(vbar, np.ascontiguousarray(x0), V, W, N, S, target, w, float(h),
                                                  float(tol), float(friction), float(relaxation), int(start),
-                                                 int(iterations),
-                                                 float(thickness),
-                                                 kinds, rows, int(JACOBI_PART_MIN), touched, active, order, impulse,
-                                                 load, part_load, part_hit, part_vel)
+                                                 int(iterations), float(thickness), kinds, rows,
+                                                 int(JACOBI_PART_MIN), touched, active, order, impulse, load,
+                                                 part_load, part_hit, part_vel)
     return done, touched, active
 
 

@@ -225,10 +225,11 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
         The proximity iterations stop when no pair would end more than
         ``tol thickness`` short of its target (default 0.01).
     relaxation : float
-        Over-relaxation of the Jacobi iterations (>= 1, default 2): from the
-        second iteration on, a contact's impulse is divided by the largest
-        number of active contacts at its vertices over `relaxation` (never by
-        less than 1) instead of by that number. The first iteration averages
+        Over-relaxation of the Jacobi iterations (>= 1, default 2; Gauss-Seidel
+        does not use it): from the second iteration on, a contact's impulse is
+        divided by the largest load at its free vertices (``sum |w_j|`` over
+        their active contacts) over `relaxation`, never by less than 1,
+        instead of by that load. The first iteration averages
         plainly, so an isolated contact or two redundant ones (a vertex above
         the edge between two faces) end at their target without rebounding;
         what is still active after it is a conflict (layers stacked closer
