@@ -65,9 +65,9 @@ class ProximityStage:
 
         Gauss-Seidel: one vertex-disjoint colour group of contacts at a time,
         each seeing the impulses of the groups before it; Jacobi: all at once,
-        each impulse divided by the largest number of active contacts at its
-        free vertices (from the second iteration on, by that number over
-        ``relaxation``, and never by less than 1). Returns how many pairs got
+        each impulse divided by the largest load (``sum |w_j|`` of the active
+        contacts) at its free vertices (from the second iteration on, by that
+        load over ``relaxation``, and never by less than 1). Returns how many pairs got
         an impulse.
         """
         if contacts is None or not len(contacts[0]):

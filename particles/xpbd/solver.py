@@ -452,7 +452,8 @@ class XPBD:
     def _solve(self, x, x_n, hs):
         """The constraint iterations of one substep, on x (d, n) in place; returns the multipliers."""
         lams = [s.new_multipliers(len(x)) for s in self._sets]
-        fast = [kernels_for(self._backend, XPBD_WEIGHT * self.n) if isinstance(s, Distance) else None for s in self._sets]
+        weight = XPBD_WEIGHT * self.n
+        fast = [kernels_for(self._backend, weight) if isinstance(s, Distance) else None for s in self._sets]
         for _ in range(self.iterations):  # a loop over iterations
             for s, batches, lam, kernels in zip(self._sets, self._batches, lams, fast):  # a loop over the few sets
                 for b in batches:  # Gauss-Seidel: one colour at a time (Jacobi: one batch)

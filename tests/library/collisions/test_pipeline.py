@@ -179,7 +179,8 @@ def test_over_relaxed_jacobi_separates_a_stack_faster(backend):
     averaging moves such a conflict by about one layer per iteration; with the default over-relaxation (2),
     10 iterations give every adjacent pair a larger share of its target speed, the innermost about 1.6 times
     plain averaging's (measured: 0.45 against 0.28); both backends give the same velocities."""
-    pytest.importorskip("numba") if backend == "numba" else None
+    if backend == "numba":
+        pytest.importorskip("numba")
     h, thickness = 0.01, 0.01
     want = 0.1 * (thickness - 0.003) / h  # each pair's target: the default repulsion of the overlap per step
     share = {}
