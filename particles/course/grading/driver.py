@@ -110,7 +110,8 @@ def _private_folder(name):
 
 
 def _pytest_command(python, root, test_file, extra):
-    return [python, "-m", "pytest", str(test_file), "-q", "-p", "particles.course.grading.plugin",
+    # --tb=native: tracebacks in the log as Python prints them (pytest's style parses each frame's source file)
+    return [python, "-m", "pytest", str(test_file), "-q", "--tb=native", "-p", "particles.course.grading.plugin",
             "-p", "no:cacheprovider", "--rootdir", str(root), "-o", "addopts=", *extra]
 
 

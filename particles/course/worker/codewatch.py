@@ -187,30 +187,76 @@ def _has_contents(cell):
     return True
 
 
-def recorder(library_prefix):
+def _import_check(exclude=()):
+    """A test that an ``exec`` comes from Python's import system loading an installed file as it is.
+
+    Returns ``imported(code, frame)``: True when `frame` (the caller of
+    ``exec``) is the import system's ``_call_with_frames_removed``, called by
+    a file loader's ``exec_module``; the loader is exactly Python's
+    ``SourceFileLoader`` or ``SourcelessFileLoader`` with nothing of its own
+    but its name and path; `code` claims that path; and the path's real
+    location is in an installed prefix (Python's, the environment's, the
+    library's) and in none of `exclude` (the worker's scratch folder). The
+    submission cannot write there, so such a module is the installed one.
+    """
+    import os
+
+    bootstrap, external = sys.modules["_frozen_importlib"], sys.modules["_frozen_importlib_external"]
+    removed, exec_module = bootstrap._call_with_frames_removed.__code__, external._LoaderBasics.exec_module.__code__
+    loaders = (external.SourceFileLoader, external.SourcelessFileLoader)
+    installed = tuple(os.path.realpath(p) + os.sep for p in _installed_prefixes())
+    excluded = tuple(os.path.realpath(p) + os.sep for p in exclude)
+    realpath, str_, type_, vars_ = os.path.realpath, str, type, vars
+
+    def imported(code, frame):
+        if frame is None or frame.f_code is not removed:
+            return False
+        frame = frame.f_back
+        if frame is None or frame.f_code is not exec_module:
+            return False
+        loader = frame.f_locals.get("self")
+        if type_(loader) not in loaders or not set(vars_(loader)) <= {"name", "path"}:
+            return False
+        path = loader.path
+        if type_(path) is not str_ or code.co_filename != path:
+            return False
+        real = realpath(path)
+        return real.startswith(installed) and not real.startswith(excluded)
+
+    return imported
+
+
+def recorder(library_prefix, exclude=()):
     """An audit hook that keeps the code objects that start running while it is armed.
 
     Returns ``(hook, arm, take)``: ``hook`` for :func:`sys.addaudithook`;
     ``arm(flag)`` switches recording on or off; ``take()`` returns the code
     recorded since the last ``take`` and forgets it. Recorded: the code of
-    ``exec``/``eval`` (but not the library's own modules being imported:
-    the worker's audit policy lets only its loaders run those), of
-    ``types.FunctionType(code, ...)`` and of ``function.__code__ = code``.
-    The state lives in the closure, not in attributes.
+    ``exec``/``eval``, of ``types.FunctionType(code, ...)`` and of
+    ``function.__code__ = code``. Not recorded: the library's own modules
+    being imported (the worker's audit policy lets only its loaders run
+    those), and the modules Python's import system loads from installed
+    files (SciPy's, the standard library's; see :func:`_import_check`), which
+    would otherwise be fingerprinted function by function, thousands of them
+    on a call's first use of SciPy. `exclude` lists folders (the worker's
+    scratch) whose modules are recorded even when they lie in an installed
+    prefix. The state lives in the closure, not in attributes.
     """
     armed, recorded = [], []
     CodeType = types.CodeType
+    imported, getframe = _import_check(exclude), sys._getframe
 
     # not named "hook": a recorder is no wall, and what a submission finds of it (gc.get_objects) must not
     # look like the audit hook it looks for when the Python walls are off (the OS-walls corpus grades that)
     def record_code(event, args, armed=armed, recorded=recorded, CodeType=CodeType, isinstance=isinstance,
-                    len=len, library_prefix=library_prefix):
+                    len=len, library_prefix=library_prefix, imported=imported, getframe=getframe):
         if not armed:
             return
         if event in ("exec", "function.__new__"):
             code = args[0] if args else None
-            if event == "exec" and isinstance(code, CodeType) and code.co_filename.startswith(library_prefix):
-                return  # the library's own module, run by the import system (others are refused)
+            if event == "exec" and isinstance(code, CodeType) and (
+                    code.co_filename.startswith(library_prefix) or imported(code, getframe(1))):
+                return  # the library's own module, or an installed one, run by the import system
         elif event == "object.__setattr__" and len(args) >= 3 and args[1] == "__code__":
             code = args[2]
         else:

@@ -102,3 +102,67 @@ def test_the_watch_reports_foreign_code_only_once_and_never_the_notebooks():
     taken.append([copy.__code__, copy.__code__])
     report = watch.report([])
     assert [r["fp"] for r in report] == [fingerprint(steppers.euler.__code__)]
+
+
+def test_the_recorder_skips_installed_modules_the_import_system_loads_and_nothing_else():
+    """A standard-library module imported during a call is not recorded (its functions would be fingerprinted one
+    by one); the same file's code compiled by hand, a copy loaded from another folder (also through a path that
+    only looks installed), a loader subclass or a loader given a method of its own, and a module in an excluded
+    folder are."""
+    script = textwrap.dedent('''
+        import importlib.machinery, importlib.util, os, shutil, sys, tempfile
+        from particles.course.worker import codewatch
+        assert "colorsys" not in sys.modules and "wave" not in sys.modules
+        stdlib = os.path.dirname(os.__file__)
+        source = os.path.join(stdlib, "colorsys.py")
+        scratch = tempfile.mkdtemp()
+        hook, arm, take = codewatch.recorder("/library/", exclude=[scratch])
+        sys.addaudithook(hook)
+
+        def load(loader, name):
+            spec = importlib.util.spec_from_loader(name, loader)
+            module = importlib.util.module_from_spec(spec)
+            loader.exec_module(module)
+
+        def names():
+            return sorted({c.co_filename.replace(stdlib, "STDLIB").replace(scratch, "SCRATCH") for c in take()})
+
+        arm(True)
+        import colorsys
+        print("import", names())
+        exec(compile(open(source).read(), source, "exec"), {})
+        print("compiled", names())
+        copy = shutil.copy(source, os.path.join(scratch, "colorsys2.py"))
+        load(importlib.machinery.SourceFileLoader("colorsys2", copy), "colorsys2")
+        print("copy", names())
+        disguised = os.path.join(stdlib, os.path.relpath(copy, stdlib))  # stdlib/../../tmp/...: starts like stdlib
+        assert disguised.startswith(stdlib)
+        load(importlib.machinery.SourceFileLoader("colorsys3", disguised), "colorsys3")
+        print("disguised", len(take()))
+
+        class Mine(importlib.machinery.SourceFileLoader):
+            pass
+        load(Mine("colorsys4", source), "colorsys4")
+        print("subclass", names())
+        loader = importlib.machinery.SourceFileLoader("colorsys5", source)
+        loader.get_data = lambda path, read=loader.get_data: read(path)
+        load(loader, "colorsys5")
+        print("own method", names())
+        arm(False)
+        hook, arm, take = codewatch.recorder("/library/", exclude=[stdlib])
+        sys.addaudithook(hook)
+        arm(True)
+        import wave
+        print("excluded", [n for n in names() if n.endswith("wave.py")])
+    ''')
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60,
+                         cwd=str(ROOT))
+    assert out.stdout.splitlines() == [
+        "import []",
+        "compiled ['STDLIB/colorsys.py']",
+        "copy ['SCRATCH/colorsys2.py']",
+        "disguised 1",
+        "subclass ['STDLIB/colorsys.py']",
+        "own method ['STDLIB/colorsys.py']",
+        "excluded ['STDLIB/wave.py']",
+    ], out.stdout + out.stderr
