@@ -149,7 +149,7 @@ def _linear_row(P, idx, c, wc, offset, lco, lam, r, dim, width, xpbd, damped):
 
 @_jit(parallel=True)
 def substep(x, v, a, given, terms, m, free, hs, iterations, xpbd, segments, P,
-            ij, dco, d_lam, idx, c, wc, offset, lco, l_lam, measure, violation):
+            ij, dco, d_lam, idx, c, wc, offset, lco, l_lam):
     """One XPBD substep of length hs in one call, in place on x and v (d, n).
 
     Prediction ``v += hs a``, ``x_n = x``, ``x += hs v`` (``a``: the given
@@ -164,8 +164,9 @@ def substep(x, v, a, given, terms, m, free, hs, iterations, xpbd, segments, P,
     ``ij`` and ``dco`` = (L0, alpha~, 1 / denominator, gamma), form 1 linear
     rows of ``idx``, ``c``, ``wc`` = w c, ``offset`` and ``lco`` = (alpha~,
     1 / denominator, gamma); a group's rows in parallel), ``v = (x - x_n) /
-    hs`` and x written back; with `measure`, ``violation[r] = |C_r|`` of
-    every distance row at the new positions.
+    hs`` and x written back. The distances' violation after it is measured
+    on x by :func:`distance_violation` (here, a loop of its own cost five
+    times as much as that kernel's: 0.72 against 0.14 ms on a 128^2 cloth).
     """
     dim, n = x.shape
     three = dim == 3
@@ -215,13 +216,6 @@ def substep(x, v, a, given, terms, m, free, hs, iterations, xpbd, segments, P,
         for e in range(dim):
             x[e, p] = P[p, e]
             v[e, p] = (P[p, e] - P[p, 3 + e]) / hs
-    if measure:
-        for r in prange(len(violation)):
-            pa, pb = ij[r, 0], ij[r, 1]
-            d0 = P[pa, 0] - P[pb, 0]
-            d1 = P[pa, 1] - P[pb, 1]
-            d2 = P[pa, 2] - P[pb, 2] if three else 0.0
-            violation[r] = abs(math.sqrt(d0 * d0 + d1 * d1 + d2 * d2) - dco[r, 0])
 
 
 @_jit(parallel=True)

@@ -183,8 +183,8 @@ class CompiledSubstep:
         kernel = pick(substep_kernel, (len(self.ij) + len(self.idx)) // max(1, len(self.segments)))
         kernel(x, v, a, given, terms, self.m, self.free, float(hs), int(iterations), self.formulation == "xpbd",
                self.segments, self.P, self.ij, self.dco, lams[0], self.idx, self.c, self.wc, self.offset, self.lco,
-               lams[1], bool(measure), self.violations)
-        return float(np.max(self.violations, initial=0.0)) if measure else None
+               lams[1])
+        return self.violation(x) if measure else None
 
     def violation(self, x):
         """The largest ``|C|`` over the distance constraints at x (d, n), in metres (0 without any)."""
