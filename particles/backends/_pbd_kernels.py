@@ -165,8 +165,8 @@ def substep(x, v, a, given, terms, m, free, hs, iterations, xpbd, segments, P,
     rows of ``idx``, ``c``, ``wc`` = w c, ``offset`` and ``lco`` = (alpha~,
     1 / denominator, gamma); a group's rows in parallel), ``v = (x - x_n) /
     hs`` and x written back. The distances' violation after it is measured
-    on x by :func:`distance_violation` (here, a loop of its own cost five
-    times as much as that kernel's: 0.72 against 0.14 ms on a 128^2 cloth).
+    on x by :func:`distance_violation`: the same loop over P at the end of
+    this kernel added 0.42 ms on a 128^2 cloth, that kernel takes 0.25 ms.
     """
     dim, n = x.shape
     three = dim == 3
