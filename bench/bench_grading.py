@@ -20,7 +20,13 @@ The third setting grades with the Python-level walls alone (no namespaces, no
 uid of its own, no Landlock: the grader as it was before the operating
 system's layers), the baseline of the per-submission cost.
 
-Run: .venv/bin/python bench/bench_grading.py [--n 50] [--repeat 2]
+With ``--corpora``, it grades instead each exercise's corpus of
+``tests/course/grader`` (typical wrong answers, correct variants, the master
+and the stub: about 16 notebooks each, ``--jobs 2``), with the output folder
+(feedback files, their figures drawn by the driver) and without it, and
+prints the seconds per notebook of each exercise and what the outputs add.
+
+Run: .venv/bin/python bench/bench_grading.py [--n 50] [--repeat 2] [--corpora]
 """
 
 import argparse
@@ -34,7 +40,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests" / "grader"))
+sys.path.insert(0, str(ROOT / "tests" / "course" / "grader"))
 
 import corpus  # noqa: E402
 
@@ -58,7 +64,11 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=50, help="number of submissions (default 50)")
     parser.add_argument("--repeat", type=int, default=2, help="runs of each setting, interleaved (default 2)")
+    parser.add_argument("--corpora", action="store_true",
+                        help="grade the six exercises' corpora instead, with and without the feedback files")
     args = parser.parse_args()
+    if args.corpora:
+        return corpora(args.repeat)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp) / "subs"
         folder.mkdir()
@@ -93,6 +103,33 @@ def main():
         one, two, python = (min(wall[name]) for name in settings)
         print(f"speed-up of --jobs 2 over --jobs 1: x{one / two:.2f}")
         print(f"per-submission cost of the OS walls over the Python walls alone: x{one / python:.2f}")
+
+
+def corpora(repeat):
+    """Seconds per notebook of each exercise's corpus, --jobs 2, with the output folder and without."""
+    import exercise_corpus  # noqa: PLC0415  (the tests' corpora, beside corpus.py)
+
+    settings = ("with feedback files", "verdicts only")
+    print(f"each exercise's corpus, --jobs 2, best of {repeat} interleaved runs; load average before: "
+          f"{os.getloadavg()[0]:.2f}")
+    print(f"{'exercise':<22}{'notebooks':>10}" + "".join(f"{name + ', s':>24}" for name in settings)
+          + f"{'per notebook':>14}{'outputs add':>13}")
+    with tempfile.TemporaryDirectory() as tmp:
+        for module in exercise_corpus.case_modules():  # a loop over the six exercises
+            folder = Path(tmp) / module.EXERCISE
+            n = len(exercise_corpus.write_corpora(folder, [module]))
+            best = {name: float("inf") for name in settings}
+            for run in range(repeat):  # interleaved, so that a burst of load elsewhere hits both settings
+                for name in settings:
+                    out = Path(tmp) / f"out-{module.EXERCISE}-{run}" if name == settings[0] else None
+                    start = time.perf_counter()
+                    summary = grade([folder], out, jobs=2, seed=1, time_limit=10.0, root=ROOT)
+                    best[name] = min(best[name], time.perf_counter() - start)
+                    assert len(summary["students"]) == n
+            full, verdicts = (best[name] for name in settings)
+            print(f"{module.EXERCISE:<22}{n:>10}{full:>24.1f}{verdicts:>24.1f}{full / n:>13.2f}s"
+                  f"{100 * (full / verdicts - 1):>12.0f}%")
+    print(f"load average after: {os.getloadavg()[0]:.2f}")
 
 
 def summary_layers(summary):
