@@ -16,7 +16,8 @@ statements:
   running: ``exec``/``eval`` of compiled code, ``types.FunctionType(code,
   ...)`` and ``function.__code__ = code`` (the library's own modules run by
   the import system excepted: the worker's audit policy lets no one else run
-  them);
+  them; so are the installed modules, SciPy's or Python's, that the import
+  system loads from their own files);
 * :class:`CodeWatch` leaves out the code compiled from the notebook's cells
   (known by identity, so a copy compiled under a cell's name is not) and
   sends the fingerprints.
