@@ -72,15 +72,22 @@ def test_the_warp_harness_parameters_are_warps(harness):
 
 
 @pytest.mark.parametrize("script", sorted(p.name for p in BENCH.glob("bench_*.py")))
-def test_every_bench_script_loads(script):
-    """Each script's imports resolve (a moved test folder once left bench_grading.py unable to start)."""
-    import importlib.util
+def test_every_bench_script_loads(script, monkeypatch):
+    """Each script's imports resolve (a moved test folder once left bench_grading.py unable to start).
 
-    sys.path.insert(0, str(BENCH))
+    What a script changes when it loads (its folders in ``sys.path``, ``OPENBLAS_NUM_THREADS``) is undone
+    after, so that the tests that run next in this process see neither."""
+    import importlib.util
+    import os
+
+    monkeypatch.setattr(sys, "path", [str(BENCH), *sys.path])
+    environment = dict(os.environ)
     try:
         spec = importlib.util.spec_from_file_location(f"_loaded_{script[:-3]}", BENCH / script)
         module = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)
     finally:
-        sys.path.remove(str(BENCH))
+        for name in set(os.environ) - set(environment):  # a loop over the few variables a script set
+            del os.environ[name]
+        os.environ.update(environment)
     assert callable(getattr(module, "main", None)), f"{script} has no main()"
