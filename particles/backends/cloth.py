@@ -11,7 +11,9 @@ numba. Each returns what the NumPy stage it replaces returns:
   :meth:`~particles.collisions.candidates.CandidateCache.pairs` searches each call's own boxes with it,
   which gives the rows its cache would (the cache only ever holds more pairs than the boxes select); a
   masked search that touches few elements tests them against every box instead of building a grid
-  (:func:`particles.backends._broad_kernels.touching_candidates`);
+  (:func:`particles.backends._broad_kernels.touching_candidates`), and a search within the boxes of an
+  earlier one filters that search's pairs (:func:`particles.backends._broad_kernels.kept_pairs`) and
+  searches again only around the vertices that left them;
 * :func:`cloth_closest`, :func:`cloth_first_contacts`: the closest points
   of :mod:`particles.collisions.proximity` and the continuous test of
   :mod:`particles.collisions.ccd`, pair by pair (:mod:`particles.backends._contact_kernels`);
@@ -28,7 +30,7 @@ imports numba.
 import numpy as np
 
 from ._body_kernels import body_vertices, low_edge_samples
-from ._broad_kernels import box_candidates, corner_bounds, key_rows, touching_candidates
+from ._broad_kernels import box_candidates, corner_bounds, key_rows, kept_pairs, touching_candidates
 from ._contact_kernels import closest_pairs, first_contact_pairs, kept_rows, proximity_rows
 from ._jacobi_kernels import BLOCKS, proximity_impulses
 from ._kernels import pick
@@ -46,6 +48,10 @@ QUERY_WEIGHT = 16
 # _jacobi_kernels.BLOCKS, each on one thread): below twice as many, in one slice, in np.bincount's order
 JACOBI_PART_MIN = 4096
 
+# a search may take its pairs from the memo of an earlier one when at most one vertex in this many left that
+# search's boxes (their pairs are searched again, box against box or on a grid of their own)
+LEFT_MAX = 64
+
 # a grid search costs about as much as this many box tests per query and target (building the grid and its
 # tables, walking the cells): a masked search that needs fewer tests element against element makes none
 GRID_TESTS = 64
@@ -57,11 +63,19 @@ def _corners(v_lo, v_hi, idx):
     return lo, hi
 
 
-def _keys(mesh, lo, hi, pad, vertices):
-    """The sorted keys ``iv m + jf`` and ``ie e + je`` of :func:`cloth_candidates`' pairs (None where none)."""
+def _keys(mesh, lo, hi, pad, vertices, memo=None):
+    """The sorted keys ``iv m + jf`` and ``ie e + je`` of :func:`cloth_candidates`' pairs (None where none).
+
+    With a `memo` (see :func:`cloth_candidate_rows`), taken from the pairs of its earlier search when the
+    boxes allow it, and kept there after a search without a mask.
+    """
     F, E = mesh.faces, mesh.edges
     v_lo = np.ascontiguousarray(lo - pad)
     v_hi = np.ascontiguousarray(hi + pad)
+    if vertices is None and memo is not None and memo.get("v_lo") is not None and memo["v_lo"].shape == v_lo.shape:
+        left = np.any((v_lo < memo["v_lo"]) | (v_hi > memo["v_hi"]), axis=1)
+        if int(left.sum()) * LEFT_MAX <= mesh.n:
+            return _kept_keys(mesh, v_lo, v_hi, vertices, memo, left)
     mask = _EMPTY_MASK if vertices is None else np.ascontiguousarray(vertices, dtype=np.bool_)
     vf = ee = None
     if len(F) and mesh.n:
@@ -70,7 +84,48 @@ def _keys(mesh, lo, hi, pad, vertices):
     if len(E) > 1:
         e_lo, e_hi = _corners(v_lo, v_hi, E)
         ee = _search(e_lo, e_hi, e_lo, e_hi, E, E, True, mask, vertices is not None)
+    if memo is not None and vertices is None:
+        memo.update(v_lo=v_lo, v_hi=v_hi, vf=vf, ee=ee)
     return vf, ee
+
+
+def _kept_keys(mesh, v_lo, v_hi, vertices, memo, left):
+    """:func:`_keys` from the memo's pairs: those still overlapping, and a search around the vertices `left`.
+
+    Every vertex outside `left` has its padded box within the one of the memo's search, so a pair of
+    them that overlaps now overlapped then and is among the memo's keys; the pairs that hold a vertex of
+    `left` are searched again (a masked search), and both sorted lists are merged.
+    """
+    F, E = mesh.faces, mesh.edges
+    masked = vertices is not None
+    mask = np.ascontiguousarray(vertices, dtype=np.bool_) if masked else _EMPTY_MASK
+    out = []
+    for keys, Q, T, same in ((memo["vf"], _own(mesh.n), F, False), (memo["ee"], E, E, True)):  # the two kinds
+        if keys is None:
+            out.append(None)
+            continue
+        Q = np.ascontiguousarray(Q, dtype=np.int64)
+        T = np.ascontiguousarray(T, dtype=np.int64)
+        q_lo, q_hi = (v_lo, v_hi) if not same and Q.shape[1] == 1 else _corners(v_lo, v_hi, Q)
+        t_lo, t_hi = _corners(v_lo, v_hi, T)
+        keep = np.empty(len(keys), dtype=np.bool_)
+        pick(kept_pairs, len(keys))(keys, len(T), Q, T, q_lo, q_hi, t_lo, t_hi, left, mask, masked, keep)
+        found = keys[keep]
+        if left.any():
+            again = _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, left, True)
+            if masked and len(again):
+                keep = np.empty(len(again), dtype=np.bool_)
+                pick(kept_pairs, len(again))(again, len(T), Q, T, q_lo, q_hi, t_lo, t_hi, _none(mesh.n), mask,
+                                             True, keep)
+                again = again[keep]
+            found = np.insert(found, np.searchsorted(found, again), again)  # disjoint sorted lists, merged
+        out.append(found)
+    return tuple(out)
+
+
+def _none(n):
+    """A mask of n vertices, none set."""
+    return np.zeros(n, dtype=np.bool_)
 
 
 def _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
@@ -110,13 +165,21 @@ def cloth_candidates(mesh, lo, hi, pad, vertices=None):
     return iv, jf, ie, je
 
 
-def cloth_candidate_rows(mesh, lo, hi, pad, vertices=None):
+def cloth_candidate_rows(mesh, lo, hi, pad, vertices=None, memo=None):
     """:func:`cloth_candidates` as :func:`particles.collisions.candidates.pair_rows` gives them: ``vf, ee``.
 
     The vertex-face rows ``(vertex, a, b, c)`` and the edge-edge rows ``(p_1, p_2, q_1, q_2)``, shape
-    (k, 4) each, int64, in the order of the sorted keys; the arguments as :func:`cloth_candidates`.
+    (k, 4) each, int64, in the order of the sorted keys; the arguments as :func:`cloth_candidates`, and
+
+    memo : dict, optional
+        Kept by the caller from call to call (:class:`~particles.collisions.candidates.CandidateCache`
+        keeps one): the padded vertex boxes and the pairs of the last search without a mask. When at
+        most one vertex in ``LEFT_MAX`` has a padded box outside its box there, the pairs are taken from
+        that search's (those whose boxes still overlap) and only the pairs holding a vertex that left are
+        searched again: the continuous test's searches within the boxes of the step's proximity search
+        filter its pairs instead of building a grid. The pairs are the same either way.
     """
-    vf, ee = _keys(mesh, lo, hi, pad, vertices)
+    vf, ee = _keys(mesh, lo, hi, pad, vertices, memo)
     out = []
     for keys, Q, T in ((vf, _own(mesh.n), mesh.faces), (ee, mesh.edges, mesh.edges)):  # the two kinds of pairs
         rows = np.empty((0 if keys is None else len(keys), 4), dtype=np.int64)

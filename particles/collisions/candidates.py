@@ -132,7 +132,10 @@ class CandidateCache:
     Contacts depend on relative motion only, so boxes are compared in a frame that follows the median
     displacement (a falling sheet's boxes do not grow with its fall). When only a few vertices left their
     boxes (at most ``max(FEW, n / 16)``), their boxes grow and they alone are searched again, against
-    every box.
+    every box. With the compiled backend each call searches its own boxes instead (the same pairs), and a
+    call without a mask whose padded boxes lie within those of the last such call filters that call's
+    pairs (in a step, the continuous test's first search within the proximity search's boxes; ``memo``
+    of :func:`particles.backends.cloth.cloth_candidate_rows`).
 
     Parameters
     ----------
@@ -161,6 +164,7 @@ class CandidateCache:
         self.x0 = self.lo = self.hi = None  # start of the search, the vertices' boxes (in its frame)
         self.vf = self.ee = None  # sorted keys iv m + jf and ie e + je of the cached pairs
         self.searches = 0
+        self.memo = {}  # the compiled backend's last search without a mask (see cloth_candidate_rows)
 
     def frame(self, x0, dx):
         """Start and end of each vertex's motion in the frame of the cache (a common translation removed)."""
@@ -215,7 +219,7 @@ class CandidateCache:
         fast = kernels_for(self.backend, CLOTH_COLLISION_WEIGHT * mesh.n)
         a, b = self.update(x0, dx, search=fast is None)
         if fast is not None:  # compiled: a search with the step's own boxes finds the pairs the cache would give
-            return fast.cloth_candidate_rows(mesh, np.minimum(a, b), np.maximum(a, b), 0.5 * pad, moved)
+            return fast.cloth_candidate_rows(mesh, np.minimum(a, b), np.maximum(a, b), 0.5 * pad, moved, self.memo)
         iv, jf = np.divmod(self.vf, max(mesh.m, 1))
         ie, je = np.divmod(self.ee, max(len(mesh.edges), 1))
         if moved is not None:

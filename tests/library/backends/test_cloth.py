@@ -55,6 +55,51 @@ def test_masked_candidates_are_the_numpy_sets(n, count):
         np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.parametrize("left, memo_used", [(0, True), (4, True), (40, False)],
+                         ids=["every box within", "4 vertices left theirs", "40 left: a new search"])
+def test_a_search_within_an_earlier_ones_boxes_gives_the_pairs_of_a_new_search(left, memo_used, monkeypatch):
+    """With a memo, a search whose padded boxes lie within the last unmasked search's filters its pairs and
+    searches again around the vertices that left their boxes (up to one in LEFT_MAX): the pairs of a search
+    from scratch, whichever way they were found."""
+    mesh, x, dx = crumpled(5, n=24)
+    lo, hi = np.minimum(x, x + dx), np.maximum(x, x + dx)
+    memo = {}
+    cloth.cloth_candidate_rows(mesh, lo, hi, 0.02, memo=memo)
+    searched = memo["v_lo"]
+    gone = np.random.default_rng(5).choice(mesh.n, left, replace=False)
+    lo2, hi2 = lo + 0.25 * (hi - lo), hi.copy()  # smaller boxes, and a smaller pad below
+    lo2[gone] += 0.05  # these vertices moved out of their boxes
+    hi2[gone] += 0.05
+    used = []
+    kept = cloth._kept_keys
+    monkeypatch.setattr(cloth, "_kept_keys", lambda *a: used.append(1) or kept(*a))
+    got = cloth.cloth_candidate_rows(mesh, lo2, hi2, 0.01, memo=memo)
+    ref = cloth.cloth_candidate_rows(mesh, lo2, hi2, 0.01)
+    assert bool(used) == memo_used
+    assert (memo["v_lo"] is searched) == memo_used  # a search from scratch is the new memo
+    assert len(ref[0]) > 50 and len(ref[1]) > 50
+    if left:
+        assert np.isin(ref[1], gone).any()  # pairs of the vertices that left, found by the search again
+    for a, b in zip(ref, got):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_a_masked_search_neither_reads_nor_replaces_the_memo():
+    """The memo holds the pairs of a search without a mask only: a masked search leaves it as it was."""
+    mesh, x, dx = crumpled(6)
+    lo, hi = np.minimum(x, x + dx), np.maximum(x, x + dx)
+    memo = {}
+    cloth.cloth_candidate_rows(mesh, lo, hi, 0.02, memo=memo)
+    before = dict(memo)
+    mask = np.zeros(mesh.n, dtype=bool)
+    mask[::5] = True
+    got = cloth.cloth_candidate_rows(mesh, lo, hi, 0.01, mask, memo=memo)
+    ref = cloth.cloth_candidate_rows(mesh, lo, hi, 0.01, mask)
+    assert all(memo[k] is before[k] for k in before)
+    for a, b in zip(ref, got):
+        np.testing.assert_array_equal(a, b)
+
+
 def test_cached_pairs_are_the_numpy_rows():
     """Compiled, CandidateCache.pairs (a search of the call's own boxes) gives the NumPy cache's rows, masked or not."""
     mesh, x, dx = crumpled(4)
