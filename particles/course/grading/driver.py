@@ -45,7 +45,6 @@ notebook rejected there is never given to a session: its record fails every
 test of the exercise's catalog with the one-line reason.
 """
 
-import hashlib
 import json
 import math
 import os
@@ -65,7 +64,7 @@ from .discovery import Unit, find_submissions, notebook_digest, written_answers
 from ..paths import exercise_tests, project_root
 from ..worker.process import library_parent
 from ..results.records import SessionRecord, SubmissionRecord, TestRecord
-from ..results.reports import feedback_html, feedback_markdown, gradescope_results, write_gradebook, write_json
+from ..results.reports import gradescope_results, write_json, write_outputs
 from ..walls.limits import check_limit
 from ..results.signing import TOKEN_FD, read_records, sign_records
 from ..results.store import RecordStore
@@ -481,8 +480,8 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
                     if store is not None:
                         store.save(result)
                 if out is not None:  # what a stopped run leaves is already usable
-                    _write_outputs(out, done, tests, hidden_visibility, students=[r.student for r in results],
-                                   written=written)
+                    write_outputs(out, done, tests, hidden_visibility, students=[r.student for r in results],
+                                  written=written)
             if progress is not None:
                 for result in results:
                     progress(result)
@@ -530,7 +529,7 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
                    "rejected": [u.where for u in units if u.rejected]}
         changed = isolation_module.library_changes(before)
         if out is not None:
-            _write_outputs(out, done, tests, hidden_visibility, written=written)
+            write_outputs(out, done, tests, hidden_visibility, written=written)
             for record in done.values():  # records/ holds what the feedback says: written grades, late work
                 store.update(record)
             if changed:
@@ -555,45 +554,3 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         if changed:
             raise LibraryChanged(changed, summary)
         return summary
-
-
-_written = {}  # (folder, hidden_visibility) -> digest of the results its files were last written from
-
-
-def _write_outputs(out, done, tests, hidden_visibility, students=None, written=None):
-    """results.json, feedback.md and feedback.html of `students` (default: all), and the gradebook, so far.
-
-    `written` (a :class:`~particles.course.results.rubric.WrittenGrades`) is merged first into every
-    record, so that a changed rubric rewrites exactly the students whose grades it changes.
-
-    A student's files are rewritten only when their results changed since this
-    process last wrote them (the final call of a run then draws no figure again).
-    """
-    written = written or WrittenGrades()
-    written.apply(done.values())
-    for record in done.values():  # a late penalty is a fraction of the points, written grades included
-        if record.late:
-            record.late["penalty"] = record.penalty
-    by_student = {}
-    for (student, _), result in done.items():
-        by_student.setdefault(student, []).append(result)
-    order = {name: k for k, name in enumerate(tests)}
-    for results in by_student.values():
-        results.sort(key=lambda r: order.get(r.exercise, len(order)))
-    for student in (by_student if students is None else set(students)):
-        folder = out / student
-        results = by_student[student]
-        key = (str(folder.resolve()), hidden_visibility)
-        digest = hashlib.sha256(json.dumps([r.to_dict() for r in results], sort_keys=True,
-                                           default=str).encode()).hexdigest()
-        names = ("results.json", "feedback.md", "feedback.html")
-        if _written.get(key) == digest and all((folder / name).exists() for name in names):
-            continue
-        folder.mkdir(parents=True, exist_ok=True)
-        write_json(folder / "results.json", gradescope_results(student, results, hidden_visibility,
-                                                               manual=written.manual()))
-        (folder / "feedback.md").write_text(feedback_markdown(student, results))
-        (folder / "feedback.html").write_text(feedback_html(student, results), encoding="utf-8")
-        _written[key] = digest
-    exercises = [name for name in tests if any(r.exercise == name for rs in by_student.values() for r in rs)]
-    write_gradebook(out / "gradebook.csv", by_student, exercises)

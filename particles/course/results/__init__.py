@@ -8,7 +8,7 @@ Modules:
 * :mod:`~particles.course.results.signing`: signed session records: the driver knows they are the
   session's own;
 * :mod:`~particles.course.results.reports`: Gradescope ``results.json``, the gradebook CSV, Markdown
-  and HTML feedback;
+  and HTML feedback, and all of them written into a grading run's folder (``write_outputs``);
 * :mod:`~particles.course.results.gradescope`: ``particles gradescope-bundle``: the autograder zip
   Gradescope runs (written questions listed for its manual grading);
 * :mod:`~particles.course.results.review`: ``particles review``: one page per written question with every

@@ -15,17 +15,22 @@ Written answers graded by people (merged from a rubric, :mod:`particles.course.r
 per question with their points and comment in the feedback, in each exercise's total and in the
 gradebook; in Gradescope's output each written question is an entry of its own, marked for Gradescope's
 manual grading when no rubric graded it (:func:`gradescope_results`).
+
+:func:`write_outputs` writes them all into a grading run's folder, per student, as its records come in
+(the driver calls it after each batch, under its lock).
 """
 
 import csv
+import hashlib
 import html
 import json
 
 from ..grading import figures
 from .records import VISIBILITIES, SubmissionRecord, score_of, to_gradescope
+from .rubric import WrittenGrades
 
 __all__ = ["score_of", "gradescope_results", "to_gradescope", "feedback_markdown", "feedback_html",
-           "write_gradebook", "VISIBILITIES"]
+           "write_gradebook", "write_outputs", "VISIBILITIES"]
 
 figures.load()
 
@@ -309,3 +314,46 @@ def write_json(path, data):
     with open(path, "w") as handle:
         json.dump(data, handle, indent=2)
         handle.write("\n")
+
+
+_written = {}  # (folder, hidden_visibility) -> digest of the results its files were last written from
+
+
+def write_outputs(out, done, tests, hidden_visibility, students=None, written=None):
+    """A grading run's folder `out`: results.json, feedback.md and feedback.html of `students` (default: all),
+    and the gradebook, as far as the records of `done` (``(student, exercise) -> SubmissionRecord``) go.
+
+    `written` (a :class:`~particles.course.results.rubric.WrittenGrades`) is merged first into every
+    record, so that a changed rubric rewrites exactly the students whose grades it changes.
+
+    A student's files are rewritten only when their results changed since this
+    process last wrote them (the final call of a run then draws no figure again).
+    """
+    written = written or WrittenGrades()
+    written.apply(done.values())
+    for record in done.values():  # a late penalty is a fraction of the points, written grades included
+        if record.late:
+            record.late["penalty"] = record.penalty
+    by_student = {}
+    for (student, _), result in done.items():
+        by_student.setdefault(student, []).append(result)
+    order = {name: k for k, name in enumerate(tests)}
+    for results in by_student.values():
+        results.sort(key=lambda r: order.get(r.exercise, len(order)))
+    for student in (by_student if students is None else set(students)):
+        folder = out / student
+        results = by_student[student]
+        key = (str(folder.resolve()), hidden_visibility)
+        digest = hashlib.sha256(json.dumps([r.to_dict() for r in results], sort_keys=True,
+                                           default=str).encode()).hexdigest()
+        names = ("results.json", "feedback.md", "feedback.html")
+        if _written.get(key) == digest and all((folder / name).exists() for name in names):
+            continue
+        folder.mkdir(parents=True, exist_ok=True)
+        write_json(folder / "results.json", gradescope_results(student, results, hidden_visibility,
+                                                               manual=written.manual()))
+        (folder / "feedback.md").write_text(feedback_markdown(student, results))
+        (folder / "feedback.html").write_text(feedback_html(student, results), encoding="utf-8")
+        _written[key] = digest
+    exercises = [name for name in tests if any(r.exercise == name for rs in by_student.values() for r in rs)]
+    write_gradebook(out / "gradebook.csv", by_student, exercises)
