@@ -54,6 +54,24 @@ def test_check_a_saved_notebook():
     assert "| ❌ |" in stub._repr_markdown_()
 
 
+def test_check_in_a_terminal_exits_with_what_it_found(tmp_path, monkeypatch, capsys):
+    """`particles check NN_topic [PATH]`: the report printed; status 0 when every public test passes, 1 when
+    one fails (the saved NN_topic.ipynb of the current folder by default), 2 when nothing was checked."""
+    monkeypatch.setenv("PARTICLES_COURSE_ROOT", str(ROOT))
+    assert main(["check", "00_warmup", str(ROOT / "solutions" / "00_warmup.ipynb")]) == 0
+    assert "00_warmup: 5 / 5 points on the public tests" in capsys.readouterr().out
+    shutil.copy(ROOT / "exercises" / "00_warmup.ipynb", tmp_path / "00_warmup.ipynb")
+    monkeypatch.chdir(tmp_path)
+    assert main(["check", "00_warmup"]) == 1
+    out = capsys.readouterr().out
+    assert "0 / 5 points" in out and "(checked the saved notebook 00_warmup.ipynb)" in out
+    assert "is not implemented yet" in out
+    assert main(["check", "99_none"]) == 2
+    assert "unknown exercise '99_none'; expected one of 00_warmup" in capsys.readouterr().err
+    assert main(["check", "00_warmup", "missing.ipynb"]) == 2
+    assert "no notebook missing.ipynb" in capsys.readouterr().err
+
+
 def test_check_outside_a_notebook_needs_a_path():
     """Without a kernel and without notebook=, check says what to pass."""
     with pytest.raises(ValueError, match="notebook="):
