@@ -109,6 +109,8 @@ def corpora(repeat):
     """Seconds per notebook of each exercise's corpus, --jobs 2, with the output folder and without."""
     import exercise_corpus  # noqa: PLC0415  (the tests' corpora, beside corpus.py)
 
+    from particles.course.grading import figures  # noqa: PLC0415  (its cache of drawn figures, cleared per run)
+
     settings = ("with feedback files", "verdicts only")
     print(f"each exercise's corpus, --jobs 2, best of {repeat} interleaved runs; load average before: "
           f"{os.getloadavg()[0]:.2f}")
@@ -122,6 +124,7 @@ def corpora(repeat):
             for run in range(repeat):  # interleaved, so that a burst of load elsewhere hits both settings
                 for name in settings:
                     out = Path(tmp) / f"out-{module.EXERCISE}-{run}" if name == settings[0] else None
+                    figures._cache.clear()  # the figures of an earlier run (same seed, same figures) are drawn again
                     start = time.perf_counter()
                     summary = grade([folder], out, jobs=2, seed=1, time_limit=10.0, root=ROOT)
                     best[name] = min(best[name], time.perf_counter() - start)
