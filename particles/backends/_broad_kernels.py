@@ -331,16 +331,14 @@ def touching_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, t_list):
 
 
 @_jit(parallel=True)
-def kept_pairs(keys, m, Q, T, q_lo, q_hi, t_lo, t_hi, left, mask, masked, keep):
+def kept_pairs(keys, m, Q, T, q_lo, q_hi, t_lo, t_hi, left, keep):
     """Which pairs of an earlier search still qualify: ``keep[k]`` for the key ``keys[k] = q m + t``.
 
-    A pair is kept when the boxes of query `q` and target `t` overlap (the closed test of :func:`overlap`),
-    neither holds a vertex of `left` (the vertices whose boxes left those of the earlier search: their pairs
-    are searched again), and, with `masked`, one of them holds a vertex of `mask`.
+    A pair is kept when the boxes of query `q` and target `t` overlap (the closed test of :func:`overlap`)
+    and neither holds a vertex of `left` (the vertices whose boxes left those of the earlier search: their
+    pairs are searched again).
     """
     for k in prange(len(keys)):
         q, t = keys[k] // m, keys[k] % m
-        ok = overlap(q_lo, q_hi, q, t_lo, t_hi, t) and not holds_masked(Q, q, left) and not holds_masked(T, t, left)
-        if ok and masked:
-            ok = holds_masked(Q, q, mask) or holds_masked(T, t, mask)
-        keep[k] = ok
+        keep[k] = (overlap(q_lo, q_hi, q, t_lo, t_hi, t) and not holds_masked(Q, q, left)
+                   and not holds_masked(T, t, left))

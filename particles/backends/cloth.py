@@ -48,8 +48,8 @@ QUERY_WEIGHT = 16
 # _jacobi_kernels.BLOCKS, each on one thread): below twice as many, in one slice, in np.bincount's order
 JACOBI_PART_MIN = 4096
 
-# a search may take its pairs from the memo of an earlier one when at most one vertex in this many left that
-# search's boxes (their pairs are searched again, box against box or on a grid of their own)
+# an unmasked search may take its pairs from the memo of an earlier one when at most one vertex in this many
+# left that search's boxes (the pairs of those vertices are searched again: a masked search)
 LEFT_MAX = 64
 
 # a grid search costs about as much as this many box tests per query and target (building the grid and its
@@ -75,7 +75,7 @@ def _keys(mesh, lo, hi, pad, vertices, memo=None):
     if vertices is None and memo is not None and memo.get("v_lo") is not None and memo["v_lo"].shape == v_lo.shape:
         left = np.any((v_lo < memo["v_lo"]) | (v_hi > memo["v_hi"]), axis=1)
         if int(left.sum()) * LEFT_MAX <= mesh.n:
-            return _kept_keys(mesh, v_lo, v_hi, vertices, memo, left)
+            return _kept_keys(mesh, v_lo, v_hi, memo, left)
     mask = _EMPTY_MASK if vertices is None else np.ascontiguousarray(vertices, dtype=np.bool_)
     vf = ee = None
     if len(F) and mesh.n:
@@ -89,43 +89,31 @@ def _keys(mesh, lo, hi, pad, vertices, memo=None):
     return vf, ee
 
 
-def _kept_keys(mesh, v_lo, v_hi, vertices, memo, left):
+def _kept_keys(mesh, v_lo, v_hi, memo, left):
     """:func:`_keys` from the memo's pairs: those still overlapping, and a search around the vertices `left`.
 
     Every vertex outside `left` has its padded box within the one of the memo's search, so a pair of
     them that overlaps now overlapped then and is among the memo's keys; the pairs that hold a vertex of
     `left` are searched again (a masked search), and both sorted lists are merged.
     """
-    F, E = mesh.faces, mesh.edges
-    masked = vertices is not None
-    mask = np.ascontiguousarray(vertices, dtype=np.bool_) if masked else _EMPTY_MASK
     out = []
-    for keys, Q, T, same in ((memo["vf"], _own(mesh.n), F, False), (memo["ee"], E, E, True)):  # the two kinds
+    kinds = ((memo["vf"], _own(mesh.n), mesh.faces, False), (memo["ee"], mesh.edges, mesh.edges, True))
+    for keys, Q, T, same in kinds:  # a loop over the two kinds of pairs: vertex-face, edge-edge
         if keys is None:
             out.append(None)
             continue
         Q = np.ascontiguousarray(Q, dtype=np.int64)
         T = np.ascontiguousarray(T, dtype=np.int64)
-        q_lo, q_hi = (v_lo, v_hi) if not same and Q.shape[1] == 1 else _corners(v_lo, v_hi, Q)
+        q_lo, q_hi = (v_lo, v_hi) if not same else _corners(v_lo, v_hi, Q)
         t_lo, t_hi = _corners(v_lo, v_hi, T)
         keep = np.empty(len(keys), dtype=np.bool_)
-        pick(kept_pairs, len(keys))(keys, len(T), Q, T, q_lo, q_hi, t_lo, t_hi, left, mask, masked, keep)
+        pick(kept_pairs, len(keys))(keys, len(T), Q, T, q_lo, q_hi, t_lo, t_hi, left, keep)
         found = keys[keep]
         if left.any():
             again = _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, left, True)
-            if masked and len(again):
-                keep = np.empty(len(again), dtype=np.bool_)
-                pick(kept_pairs, len(again))(again, len(T), Q, T, q_lo, q_hi, t_lo, t_hi, _none(mesh.n), mask,
-                                             True, keep)
-                again = again[keep]
             found = np.insert(found, np.searchsorted(found, again), again)  # disjoint sorted lists, merged
         out.append(found)
     return tuple(out)
-
-
-def _none(n):
-    """A mask of n vertices, none set."""
-    return np.zeros(n, dtype=np.bool_)
 
 
 def _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
