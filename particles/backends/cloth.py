@@ -102,8 +102,6 @@ def _kept_keys(mesh, v_lo, v_hi, memo, left):
         if keys is None:
             out.append(None)
             continue
-        Q = np.ascontiguousarray(Q, dtype=np.int64)
-        T = np.ascontiguousarray(T, dtype=np.int64)
         q_lo, q_hi = (v_lo, v_hi) if not same else _corners(v_lo, v_hi, Q)
         t_lo, t_hi = _corners(v_lo, v_hi, T)
         keep = np.empty(len(keys), dtype=np.bool_)
