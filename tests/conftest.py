@@ -19,13 +19,17 @@ def executed_lecture(tmp_path_factory, request):
 
     With pytest-xdist (``make test`` runs two workers) the executed notebooks
     are shared between the worker processes through files in the session's
-    temporary folder, under a lock: whichever worker asks first runs the
-    lecture, the other reads the result. Raises ``RuntimeError`` with the
-    failing cell's message on the first failing cell, every time it is asked
-    for (a failure is cached too, so it is not run twice).
+    temporary folder, one lock per lecture: whichever worker asks first runs
+    the lecture, the other reads the result. A worker that asks for a lecture
+    another one is running does not wait for it: it runs a lecture of the same
+    folder that no one has started (waiting left a core idle for most of the
+    lectures' time: two workers asking in the same order took turns). Raises
+    ``RuntimeError`` with the failing cell's message on the first failing cell,
+    every time it is asked for (a failure is cached too, so it is not run twice).
     """
     import fcntl
     import json
+    import os
 
     import nbformat
 
@@ -37,18 +41,38 @@ def executed_lecture(tmp_path_factory, request):
     folder.mkdir(exist_ok=True)
     cache = {}
 
+    def files(path):
+        return folder / (path.stem + ".ipynb"), folder / (path.stem + ".error.json")
+
+    def done(path):
+        return any(f.exists() for f in files(path))
+
+    def produce(path, wait):
+        """Run `path` unless it is done; False, without waiting, if another worker holds it and not `wait`."""
+        target, failure = files(path)
+        with open(folder / (path.stem + ".lock"), "w") as lock:
+            try:
+                fcntl.flock(lock, fcntl.LOCK_EX | (0 if wait else fcntl.LOCK_NB))
+            except BlockingIOError:
+                return False
+            if not done(path):
+                part = folder / (path.stem + ".part")  # written, then renamed: whole or absent for any reader
+                try:
+                    nbformat.write(execute_notebook(path, timeout=180), str(part))
+                    os.replace(part, target)
+                except Exception as error:  # noqa: BLE001 - re-raised below for every test that asks
+                    part.write_text(json.dumps(f"{type(error).__name__}: {error}"))
+                    os.replace(part, failure)
+            return True
+
     def run(path):
         key = str(path)
         if key not in cache:
-            target = folder / (path.stem + ".ipynb")
-            failure = folder / (path.stem + ".error.json")
-            with open(folder / (path.stem + ".lock"), "w") as lock:
-                fcntl.flock(lock, fcntl.LOCK_EX)
-                if not target.exists() and not failure.exists():
-                    try:
-                        nbformat.write(execute_notebook(path, timeout=180), str(target))
-                    except Exception as error:  # noqa: BLE001 - re-raised below for every test that asks
-                        failure.write_text(json.dumps(f"{type(error).__name__}: {error}"))
+            while not done(path) and not produce(path, wait=False):
+                others = (p for p in sorted(path.parent.glob("[0-9][0-9]_*.ipynb")) if p != path and not done(p))
+                if not any(produce(p, wait=False) for p in others):  # nothing else to run: wait for it
+                    produce(path, wait=True)
+            target, failure = files(path)
             cache[key] = (nbformat.read(str(target), as_version=4) if target.exists()
                           else RuntimeError(json.loads(failure.read_text())))
         if isinstance(cache[key], Exception):
