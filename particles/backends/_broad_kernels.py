@@ -283,21 +283,28 @@ def key_rows(keys, m, Q, T, out):
 
 
 @_jit()
-def _touching(q, q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, t_list, out, start, write):
-    """The targets of query `q` in a masked search without a grid (all of them when `q` holds a masked vertex,
-    else those of `t_list`), in increasing order, written into ``out[start:]`` when `write`; their count."""
-    found = 0
-    every = q_in[q]
-    count = len(t_lo) if every else len(t_list)
-    for e in range(q + 1 if every and same else 0, count):
-        t = e if every else t_list[e]
-        if same and t <= q:
-            continue
-        if not overlap(q_lo, q_hi, q, t_lo, t_hi, t) or shares_vertex(Q, q, T, t):
-            continue
-        if write:
-            out[start + found] = t
-        found += 1
+def _masked_row(r, q_list, t_list, q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, out, start, write):
+    """Row `r` of :func:`touching_candidates`' pairs, written into ``out[start:]`` when `write`; their count.
+
+    Row ``r < len(q_list)``: masked query ``q = q_list[r]`` against every target (``t > q`` when `same`);
+    a later row: masked target ``t = t_list[r - len(q_list)]`` against every query that holds no masked
+    vertex (``q < t`` when `same`), whose pairs with masked queries are their rows'. Keys ``q len(T) + t``.
+    """
+    m, found = len(t_lo), 0
+    if r < len(q_list):
+        q = q_list[r]
+        for t in range(q + 1 if same else 0, m):  # one long loop over the targets, one box against many
+            if overlap(q_lo, q_hi, q, t_lo, t_hi, t) and not shares_vertex(Q, q, T, t):
+                if write:
+                    out[start + found] = q * m + t
+                found += 1
+        return found
+    t = t_list[r - len(q_list)]
+    for q in range(t if same else len(q_lo)):
+        if overlap(q_lo, q_hi, q, t_lo, t_hi, t) and not q_in[q] and not shares_vertex(Q, q, T, t):
+            if write:
+                out[start + found] = q * m + t
+            found += 1
     return found
 
 
@@ -305,28 +312,24 @@ def _touching(q, q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, t_list, out, start, w
 def touching_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, t_list):
     """:func:`box_candidates` with a mask touching few elements, without a grid: sorted keys ``q len(T) + t``.
 
-    A query that holds a masked vertex (`q_in`) is tested against every target, any other against the
-    targets that hold one (`t_list`, increasing): the pairs of :func:`box_candidates`, as
-    :func:`particles.collisions.candidates.candidates_touching` tests them. Counted, then written.
+    The queries that hold a masked vertex (`q_in`) are tested against every target, and the targets that
+    hold one (`t_list`, increasing) against every other query: the pairs of :func:`box_candidates`, as
+    :func:`particles.collisions.candidates.candidates_touching` tests them. One row per masked element,
+    each a long loop over all the others (a short loop over the masked ones per query took 4 times as
+    long); counted, written, then sorted.
     """
-    nq, m = len(q_lo), len(t_lo)
-    found = np.zeros(nq + 1, dtype=np.int64)
-    blocks = (nq + QUERY_BLOCK - 1) // QUERY_BLOCK
+    q_list = np.flatnonzero(q_in)
+    rows = len(q_list) + len(t_list)
+    found = np.zeros(rows + 1, dtype=np.int64)
     empty = np.zeros(0, dtype=np.int64)
-    for b in prange(blocks):
-        for q in range(b * QUERY_BLOCK, min(nq, (b + 1) * QUERY_BLOCK)):
-            found[q + 1] = _touching(q, q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, t_list, empty, 0, False)
-    for q in range(nq):
-        found[q + 1] += found[q]
-    targets = np.empty(found[nq], dtype=np.int64)
-    for b in prange(blocks):
-        for q in range(b * QUERY_BLOCK, min(nq, (b + 1) * QUERY_BLOCK)):
-            _touching(q, q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, t_list, targets, found[q], True)
-    keys = np.empty(found[nq], dtype=np.int64)
-    for b in prange(blocks):
-        for q in range(b * QUERY_BLOCK, min(nq, (b + 1) * QUERY_BLOCK)):
-            for e in range(found[q], found[q + 1]):
-                keys[e] = q * m + targets[e]
+    for r in prange(rows):
+        found[r + 1] = _masked_row(r, q_list, t_list, q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, empty, 0, False)
+    for r in range(rows):
+        found[r + 1] += found[r]
+    keys = np.empty(found[rows], dtype=np.int64)
+    for r in prange(rows):
+        _masked_row(r, q_list, t_list, q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, keys, found[r], True)
+    keys.sort()  # each pair is found once, by one row
     return keys
 
 
