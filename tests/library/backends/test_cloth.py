@@ -148,6 +148,29 @@ def test_closest_points_agree(edge):
 
 
 @pytest.mark.parametrize("edge", [False, True])
+@pytest.mark.parametrize("scale", [1.0, 1.0 - 1e-12, 1.0 + 1e-12, 1.5, 2.0])
+def test_rest_verdicts_are_the_closest_points_ones(edge, scale):
+    """Pairs of a flat grid at rest, and the grid's own distances as rest_distance (ties, and a hair either
+    side): the box-gap shortcut of rest_far gives the verdict of comparing the closest points' distance."""
+    from particles.backends._contact_kernels import rest_far  # noqa: PLC0415
+
+    n = 8
+    mesh = TriangleMesh.grid(n, n)
+    u, v = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
+    xr = np.ascontiguousarray(np.stack([u.ravel(), v.ravel(), np.zeros(n * n)], axis=1))
+    iv, jf, ie, je = candidates_in_boxes(mesh, xr, xr, 0.5)  # most pairs of the sheet, near and far
+    rows = np.concatenate([mesh.edges[ie], mesh.edges[je]], axis=1) if edge else \
+        np.concatenate([iv[:, None], mesh.faces[jf]], axis=1)
+    spacing = 1.0 / (n - 1)
+    distance, _, _ = cloth.cloth_closest(xr, rows, edge, PARALLEL)
+    rest_distance = scale * spacing
+    got = np.array([rest_far(xr, rows, k, edge, rest_distance, PARALLEL) for k in range(len(rows))])
+    np.testing.assert_array_equal(got, distance >= rest_distance)
+    assert got.any() and not got.all()
+    assert np.any(np.abs(distance - spacing) <= 1e-15)  # ties with the rest distance are among them
+
+
+@pytest.mark.parametrize("edge", [False, True])
 def test_closest_points_at_zero_distance_take_numpys_fallback_normals(edge):
     """Pairs that touch: the normal falls back to the face's (the edges' cross product), and for a flat
     triangle (parallel edges) to a perpendicular, as in proximity's kernels; a unit vector in every case."""
