@@ -23,7 +23,9 @@ def executed_lecture(tmp_path_factory, request):
     the lecture, the other reads the result. A worker that asks for a lecture
     another one is running does not wait for it: it runs a lecture of the same
     folder that no one has started (waiting left a core idle for most of the
-    lectures' time: two workers asking in the same order took turns). Raises
+    lectures' time: two workers asking in the same order took turns). In a
+    run of a few tests that may be a lecture no test asks for: one lecture's
+    time at most per wait. Raises
     ``RuntimeError`` with the failing cell's message on the first failing cell,
     every time it is asked for (a failure is cached too, so it is not run twice).
     """
