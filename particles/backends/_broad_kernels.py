@@ -315,7 +315,7 @@ def touching_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, t_list):
     The queries that hold a masked vertex (`q_in`) are tested against every target, and the targets that
     hold one (`t_list`, increasing) against every other query: the pairs of :func:`box_candidates`, as
     :func:`particles.collisions.candidates.candidates_touching` tests them. One row per masked element,
-    each a long loop over all the others (a short loop over the masked ones per query took 4 times as
+    each a long loop over all the others (a short loop over the masked ones per query took twice as
     long); counted, written, then sorted.
     """
     q_list = np.flatnonzero(q_in)
