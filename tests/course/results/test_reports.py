@@ -189,6 +189,21 @@ def test_curve_spec_keeps_plain_bounded_json_whatever_the_student_returned():
         curve_spec("t", "x", "y", [{"y": [1], "role": "mine"}])
 
 
+def test_a_figure_is_drawn_once_until_the_cache_is_cleared(monkeypatch):
+    """The same figure (by content) is drawn once per process; after clear_cache it is drawn again."""
+    from particles.course.grading import figures
+
+    drawn = []
+    real = figures._draw
+    monkeypatch.setattr(figures, "_draw", lambda spec: drawn.append(1) or real(spec))
+    spec = curve_spec("cache", "x", "y", [{"label": "yours", "x": [1, 2, 3], "y": [3.0, 1.0, 2.0]}])
+    figures.clear_cache()
+    first = figures.data_uri(spec)
+    assert figures.data_uri(spec) == first and len(drawn) == 1
+    figures.clear_cache()
+    assert figures.data_uri(spec) == first and len(drawn) == 2
+
+
 def test_texts_are_escaped_in_html_outputs():
     """A reason holding markup (a student's exception message) is escaped in feedback.html and Gradescope's HTML."""
     spec = curve_spec("<b>title</b>", "x", "y", [{"label": "yours", "y": [1, 2]}], caption="a <i>caption</i>")
