@@ -69,7 +69,6 @@ def _keys(mesh, lo, hi, pad, vertices, memo=None):
     With a `memo` (see :func:`cloth_candidate_rows`), taken from the pairs of its earlier search when the
     boxes allow it, and kept there after a search without a mask.
     """
-    F, E = mesh.faces, mesh.edges
     v_lo = np.ascontiguousarray(lo - pad)
     v_hi = np.ascontiguousarray(hi + pad)
     if vertices is None and memo is not None and memo.get("v_lo") is not None and memo["v_lo"].shape == v_lo.shape:
@@ -77,13 +76,9 @@ def _keys(mesh, lo, hi, pad, vertices, memo=None):
         if int(left.sum()) * LEFT_MAX <= mesh.n:
             return _kept_keys(mesh, v_lo, v_hi, memo, left)
     mask = _EMPTY_MASK if vertices is None else np.ascontiguousarray(vertices, dtype=np.bool_)
-    vf = ee = None
-    if len(F) and mesh.n:
-        f_lo, f_hi = _corners(v_lo, v_hi, F)
-        vf = _search(v_lo, v_hi, f_lo, f_hi, _own(mesh.n), F, False, mask, vertices is not None)
-    if len(E) > 1:
-        e_lo, e_hi = _corners(v_lo, v_hi, E)
-        ee = _search(e_lo, e_hi, e_lo, e_hi, E, E, True, mask, vertices is not None)
+    wanted = (len(mesh.faces) > 0 and mesh.n > 0, len(mesh.edges) > 1)
+    vf, ee = (_search(*_boxes(v_lo, v_hi, Q, T, same), Q, T, same, mask, vertices is not None) if want else None
+              for (Q, T, same), want in zip(_kinds(mesh), wanted))  # the two kinds of pairs
     if memo is not None and vertices is None:
         memo.update(v_lo=v_lo, v_hi=v_hi, vf=vf, ee=ee)
     return vf, ee
@@ -97,13 +92,11 @@ def _kept_keys(mesh, v_lo, v_hi, memo, left):
     `left` are searched again (a masked search), and both sorted lists are merged.
     """
     out = []
-    kinds = ((memo["vf"], _own(mesh.n), mesh.faces, False), (memo["ee"], mesh.edges, mesh.edges, True))
-    for keys, Q, T, same in kinds:  # a loop over the two kinds of pairs: vertex-face, edge-edge
+    for keys, (Q, T, same) in zip((memo["vf"], memo["ee"]), _kinds(mesh)):  # the two kinds of pairs
         if keys is None:
             out.append(None)
             continue
-        q_lo, q_hi = (v_lo, v_hi) if not same else _corners(v_lo, v_hi, Q)
-        t_lo, t_hi = _corners(v_lo, v_hi, T)
+        q_lo, q_hi, t_lo, t_hi = _boxes(v_lo, v_hi, Q, T, same)
         keep = np.empty(len(keys), dtype=np.bool_)
         pick(kept_pairs, len(keys))(keys, len(T), Q, T, q_lo, q_hi, t_lo, t_hi, left, keep)
         found = keys[keep]
@@ -129,6 +122,17 @@ def _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
 def _own(n):
     """Each vertex as a one-vertex element: ``[[0], [1], ..., [n - 1]]``."""
     return np.arange(n, dtype=np.int64)[:, None]
+
+
+def _kinds(mesh):
+    """The two kinds of pairs, each ``(Q, T, same)``: vertices against faces, then edges against edges."""
+    return (_own(mesh.n), mesh.faces, False), (mesh.edges, mesh.edges, True)
+
+
+def _boxes(v_lo, v_hi, Q, T, same):
+    """Query and target boxes ``q_lo, q_hi, t_lo, t_hi`` of a kind of pairs from the padded vertex boxes."""
+    t_lo, t_hi = _corners(v_lo, v_hi, T)
+    return (t_lo, t_hi, t_lo, t_hi) if same else (v_lo, v_hi, t_lo, t_hi)
 
 
 def cloth_candidates(mesh, lo, hi, pad, vertices=None):
@@ -167,7 +171,7 @@ def cloth_candidate_rows(mesh, lo, hi, pad, vertices=None, memo=None):
     """
     vf, ee = _keys(mesh, lo, hi, pad, vertices, memo)
     out = []
-    for keys, Q, T in ((vf, _own(mesh.n), mesh.faces), (ee, mesh.edges, mesh.edges)):  # the two kinds of pairs
+    for keys, (Q, T, _) in zip((vf, ee), _kinds(mesh)):  # the two kinds of pairs
         rows = np.empty((0 if keys is None else len(keys), 4), dtype=np.int64)
         if len(rows):
             pick(key_rows, len(rows))(keys, len(T), np.ascontiguousarray(Q, dtype=np.int64),
