@@ -19,7 +19,7 @@ XPBD from 1024 particles, :data:`particles.backends.XPBD_WEIGHT`);
 ``--compare`` runs the treated sheet with NumPy and with numba side by side
 (a column each), after a warm-up that loads the compiled kernels.
 
-    python bench/bench_cloth_fold.py            # 64^2 (with --no-baseline, 80 s on a quiet machine)
+    python bench/bench_cloth_fold.py            # 64^2 (with --no-baseline: 2 min 2 s on 2026-12-07, a slow host)
     python bench/bench_cloth_fold.py --n 32 --compare   # NumPy against numba
     python bench/bench_cloth_fold.py --xpbd-sizes       # XPBD alone per size: where "auto" compiles it
 """
