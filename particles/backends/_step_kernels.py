@@ -6,10 +6,12 @@ this one makes one, over blocks of particles in parallel. Block ``c`` owns
 the particles ``start[c]:start[c + 1]`` and, with no other block, computes
 their new state:
 
-1. it copies the positions and velocities of the particles its springs
-   touch, ``lo[c]:hi[c]`` (its *window*), into rows ``xw[r] = (x_p, v_p)``,
-   so that a spring reads each end from one cache line (the system keeps
-   ``X`` in Fortran order, each coordinate of all particles together);
+1. it reads the positions and velocities of the particles its springs
+   touch, ``lo[c]:hi[c]`` (its *window*), from the rows ``xw[p] = (x_p, v_p)``
+   of a C-ordered state, so that a spring reads each end from one cache line
+   (a state in the system's Fortran order is copied to C order once, before
+   the first step, by :mod:`particles.backends.compiled`: one kernel for
+   every state, not one per memory order, to compile);
 2. it computes its springs, those whose lower end ``a = min(i, j)`` is its
    own, summing the force on ``a`` in registers and adding the force on the
    other end into its rows ``fw`` (the other ends of a cloth's springs are at
@@ -62,7 +64,7 @@ def _larger(big, value):
 
 
 @_jit(fastmath={"contract"})  # fused multiply-adds: rounding differs from NumPy's by ~1e-16
-def _block(c, X, copy, start, lo, hi, row0, xw, fw, rb0, rowp, rptr, other_end, which, sidx, L0a, ka, kda, L0b, kb,
+def _block(c, start, lo, hi, row0, xw, fw, rb0, rowp, rptr, other_end, which, sidx, L0a, ka, kda, L0b, kb,
            kdb, L0c, kc, kdc, jb0, joints, bi, bj, bl, bkb, btheta0, D, R, W, other, has_other, m, free, G, h, out):
     """Block c's part of a step (see :func:`symplectic_euler_steps`): the new states of its particles, into out.
 
@@ -73,26 +75,17 @@ def _block(c, X, copy, start, lo, hi, row0, xw, fw, rb0, rowp, rptr, other_end, 
     damped = D != 0.0 or R != 0.0
     big = 0.0  # the largest |entry| of the block's new states
     shift = row0[c] - lo[c]  # particle p is row p + shift of this block's window of fw
-    sx = shift if copy else 0  # and row p + sx of xw (the rows of X itself when they are not copied)
     for p in range(lo[c], hi[c]):
         r = p + shift
         fw[r, 0] = 0.0
         fw[r, 1] = 0.0
         if three:
             fw[r, 2] = 0.0
-        if copy:
-            xw[r, 0] = X[p, 0, 0]
-            xw[r, 1] = X[p, 0, 1]
-            xw[r, dim] = X[p, 1, 0]
-            xw[r, dim + 1] = X[p, 1, 1]
-            if three:
-                xw[r, 2] = X[p, 0, 2]
-                xw[r, 5] = X[p, 1, 2]
     for u in range(rb0[c], rb0[c + 1]):
-        rr, rx = rowp[u] + shift, rowp[u] + sx
+        rr, rx = rowp[u] + shift, rowp[u]
         f0, f1, f2 = 0.0, 0.0, 0.0
         for e in range(rptr[u], rptr[u + 1]):
-            ro, ox, q, s = other_end[e] + shift, other_end[e] + sx, which[e], sidx[e]
+            ro, ox, q, s = other_end[e] + shift, other_end[e], which[e], sidx[e]
             if q == 0:
                 L0, k, kd = L0a[s], ka[s], kda[s]
             elif q == 1:
@@ -123,7 +116,7 @@ def _block(c, X, copy, start, lo, hi, row0, xw, fw, rb0, rowp, rptr, other_end, 
             fw[rr, 2] += f2
     for e in range(jb0[c], jb0[c + 1]):  # the joints touching the block: e1 = x_j - x_i, e2 = x_l - x_j
         t = joints[e]
-        ri, rj, rl = bi[t] + sx, bj[t] + sx, bl[t] + sx
+        ri, rj, rl = bi[t], bj[t], bl[t]
         a0, a1 = xw[rj, 0] - xw[ri, 0], xw[rj, 1] - xw[ri, 1]
         b0, b1 = xw[rl, 0] - xw[rj, 0], xw[rl, 1] - xw[rj, 1]
         a2 = xw[rj, 2] - xw[ri, 2] if three else 0.0
@@ -159,7 +152,7 @@ def _block(c, X, copy, start, lo, hi, row0, xw, fw, rb0, rowp, rptr, other_end, 
             fw[fj, 2] += g12 - g22
             fw[fl, 2] += g22
     for p in range(start[c], start[c + 1]):  # the new state of the block's particles
-        r, rx = p + shift, p + sx
+        r, rx = p + shift, p
         f0, f1 = fw[r, 0], fw[r, 1]
         f2 = fw[r, 2] if three else 0.0
         if has_other:
@@ -213,7 +206,7 @@ def _block(c, X, copy, start, lo, hi, row0, xw, fw, rb0, rowp, rptr, other_end, 
 
 
 @_jit(parallel=True, fastmath={"contract"})
-def symplectic_euler_steps(X, copy, start, lo, hi, row0, xw, fw, rb0, rowp, rptr, other_end, which, sidx,
+def symplectic_euler_steps(start, lo, hi, row0, xw, fw, rb0, rowp, rptr, other_end, which, sidx,
                            L0a, ka, kda, L0b, kb, kdb, L0c, kc, kdc, jb0, joints, bi, bj, bl, bkb, btheta0,
                            D, R, W, other, has_other, m, free, G, hs, limit, out0, out1, sizes):
     """Steps for up to three spring sets and one bending set: ``v + h a``, then ``x + h v_new``.
@@ -223,8 +216,9 @@ def symplectic_euler_steps(X, copy, start, lo, hi, row0, xw, fw, rb0, rowp, rptr
     damping: ``D`` the sum of the coefficients in kg/s, ``R`` of the rates in 1/s), plus each
     wind of the step's table ``W[s]`` (rows ``s, u, gust, t / period, wavelength, per_mass``: ``s (1 + gust
     sin(2 pi (t / period - (x . u) / wavelength)))``, times ``m_p`` when per_mass); ``G`` the
-    sum of the uniform gravities. Block c's rows of ``xw`` and ``fw`` are ``row0[c]:row0[c + 1]``,
-    for the particles ``lo[c]:hi[c]``; its spring rows are ``rb0[c]:rb0[c + 1]``: row u is
+    sum of the uniform gravities. Row p of ``xw`` (n, 2 d) is particle p's ``(x_p, v_p)`` in the
+    first state; block c's rows of ``fw`` are ``row0[c]:row0[c + 1]``, for the particles
+    ``lo[c]:hi[c]``; its spring rows are ``rb0[c]:rb0[c + 1]``: row u is
     particle ``rowp[u]`` and its entries ``rptr[u]:rptr[u + 1]``; its joints are
     ``joints[jb0[c]:jb0[c + 1]]``, joint t joining ``bi[t], bj[t], bl[t]``.
 
@@ -235,7 +229,7 @@ def symplectic_euler_steps(X, copy, start, lo, hi, row0, xw, fw, rb0, rowp, rptr
     :meth:`particles.springs.Springs.add_to`), summed in registers, and minus that on o. A
     joint's forces are those of :meth:`particles.springs.Bending.add_to`.
 
-    Steps: ``len(hs)`` steps from X, step s of ``hs[s]`` seconds with the winds' table ``W[s]``;
+    Steps: ``len(hs)`` steps from the state ``xw``, step s of ``hs[s]`` seconds with the winds' table ``W[s]``;
     step s writes its state into `out0` (s even) or `out1` (s odd) and the next one reads it there
     (its rows in place: C order). After each step, the largest ``|entry|`` of the new state
     (positions and velocities, inf when one is NaN) is compared with `limit`: the steps stop
@@ -248,12 +242,12 @@ def symplectic_euler_steps(X, copy, start, lo, hi, row0, xw, fw, rb0, rowp, rptr
     size = 0.0
     for s in range(len(hs)):  # a loop over the steps: each one a parallel pass over the blocks
         dst = out0 if s % 2 == 0 else out1
-        rows, fill = xw, copy  # the first step reads X (through xw); the others the state before, in place
+        rows = xw  # the first step reads the state given; the others the state before, in place
         if s > 0:
-            rows, fill = (out1 if s % 2 == 0 else out0).reshape((n, 2 * dim)), False
+            rows = (out1 if s % 2 == 0 else out0).reshape((n, 2 * dim))
         Ws, h = W[s], hs[s]
         for c in prange(len(start) - 1):
-            sizes[c] = _block(c, X, fill, start, lo, hi, row0, rows, fw, rb0, rowp, rptr, other_end, which, sidx,
+            sizes[c] = _block(c, start, lo, hi, row0, rows, fw, rb0, rowp, rptr, other_end, which, sidx,
                               L0a, ka, kda, L0b, kb, kdb, L0c, kc, kdc, jb0, joints, bi, bj, bl, bkb, btheta0,
                               D, R, Ws, other, has_other, m, free, G, h, dst)
         size = 0.0

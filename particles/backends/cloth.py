@@ -120,8 +120,11 @@ def _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
 
 
 def _own(n):
-    """Each vertex as a one-vertex element: ``[[0], [1], ..., [n - 1]]``."""
-    return np.arange(n, dtype=np.int64)[:, None]
+    """Each vertex as a one-vertex element: ``[[0], [1], ..., [n - 1]]``, read-only like the mesh's faces and
+    edges, so that the kernels see one type of element array (numba compiles a kernel for each)."""
+    own = np.arange(n, dtype=np.int64)[:, None]
+    own.setflags(write=False)
+    return own
 
 
 def _kinds(mesh):

@@ -321,7 +321,7 @@ class CompiledStep:
         rptr = np.concatenate([[0], np.cumsum(np.concatenate(rcount))])
         row0 = np.concatenate([[0], np.cumsum(hi - lo)])
         d = self.system.d
-        layout = dict(start=start, lo=lo, hi=hi, row0=row0, xw=np.empty((row0[-1], 2 * d)),
+        layout = dict(start=start, lo=lo, hi=hi, row0=row0,
                       fw=np.empty((row0[-1], d)), pinned=None, joints=joints, other=np.zeros((1, d)),
                       rows=(rb0, np.concatenate(rowp).astype(np.uint32), rptr.astype(np.uint32),
                             np.concatenate(ends).astype(np.uint32), which[entries], sidx[entries]))
@@ -394,11 +394,12 @@ class CompiledStep:
         found, layout, arrays = prepared
         system = self.system
         n = system.n
-        copy = not X.flags.c_contiguous  # rows (x_p, v_p) of a C-ordered state are read where they are
-        xw = layout["xw"] if copy else X.reshape(n, 2 * system.d)
+        # the rows (x_p, v_p) of a C-ordered state are read where they are; a state in the system's Fortran
+        # order (the first step of a run after a NumPy step or set_state) is copied once: one kernel to compile
+        xw = np.ascontiguousarray(X).reshape(n, 2 * system.d)
         sizes = layout.setdefault("sizes", np.empty(len(layout["start"]) - 1))
         return pick(symplectic_euler_steps, len(layout["rows"][3]))(
-            X, copy, layout["start"], layout["lo"], layout["hi"], layout["row0"], xw, layout["fw"],
+            layout["start"], layout["lo"], layout["hi"], layout["row0"], xw, layout["fw"],
             *layout["rows"], *arrays, float(found.D), float(found.R), _wind_table(found.winds, ts, system.d),
             layout["other"] if other is None else other, other is not None,
             np.ascontiguousarray(system.m, dtype=np.float64), layout["free"], tuple(found.G.tolist()), hs,

@@ -3,13 +3,17 @@
 :meth:`particles.constraints.ProvotConstraint.stepper` and
 :meth:`particles.collisions.Collider.stepper` call these (through
 :func:`particles.backends.kernels_for`) when their backend resolves to numba:
-they correct the end state of a step in place, in its own memory order (the
-compiled step's C-ordered rows, or a NumPy step's Fortran-ordered columns),
-with the results of the NumPy fixes to rounding. What does not change
+they correct the end state of a step in place, with the results of the NumPy
+fixes to rounding. The kernels read C-ordered states (the compiled step's
+rows); a NumPy step's Fortran-ordered state is corrected in a C-ordered copy
+that is written back (:func:`_rows`), so that each kernel is compiled once,
+not once per memory order. What does not change
 between steps (the incidence list of the constrained springs, the buffers) is
 kept on the fix's object, in ``_compiled``. Importing this module imports
 numba.
 """
+
+import contextlib
 
 import numpy as np
 
@@ -39,6 +43,19 @@ def _buffer(store, name, shape, dtype=np.float64):
     return a
 
 
+@contextlib.contextmanager
+def _rows(X):
+    """X (n, 2, d) itself when it is C-ordered, else a C-ordered copy that is written back into X at the end."""
+    if X.flags.c_contiguous:
+        yield X
+        return
+    rows = np.ascontiguousarray(X)
+    try:
+        yield rows
+    finally:
+        X[...] = rows
+
+
 def _springs(constraint, n):
     """The constrained springs as the kernels read them: ends, rest lengths, shares, the incidence list."""
     store = _store(constraint)
@@ -66,6 +83,12 @@ def provot(constraint, X, h):
     compiled strain pass and a compiled correction; a step whose springs
     all hold costs one strain pass.
     """
+    with _rows(X) as rows:
+        return _provot(constraint, rows, h)
+
+
+def _provot(constraint, X, h):
+    """:func:`provot` on a C-ordered X."""
     n, _, d = X.shape
     store = _springs(constraint, n)
     i, j, L0, wi, wj, movable = (store[k] for k in ("i", "j", "L0", "wi", "wj", "movable"))
@@ -153,14 +176,16 @@ def collide(collider, X_old, X, t, h, m, free):
     flag = _buffer(store, "flag", (n,), np.bool_)
     backtrack = collider.method == "backtrack"
     lipschitz = 0.0 if collider.surface.lipschitz is None else float(collider.surface.lipschitz)
-    pick(collider_candidates, n)(kind, P, X_old, X, free, float(h), backtrack, lipschitz, flag)
-    todo = np.flatnonzero(flag)
-    slots = collider.max_bounces + 1
-    rec = _buffer(store, "rec", (max(len(todo), 16), slots, 1 + 4 * d))
-    has = _buffer(store, "has", rec.shape[:2], np.bool_)
-    pick(collider_resolve, len(todo))(kind, P, X_old, X, todo, m, float(t), float(h), backtrack,
-                                      collider.restitution, collider.friction, collider.max_bounces,
-                                      collider.samples, lipschitz, rec, has)
+    X_old = np.ascontiguousarray(X_old)
+    with _rows(X) as rows:
+        pick(collider_candidates, n)(kind, P, X_old, rows, free, float(h), backtrack, lipschitz, flag)
+        todo = np.flatnonzero(flag)
+        slots = collider.max_bounces + 1
+        rec = _buffer(store, "rec", (max(len(todo), 16), slots, 1 + 4 * d))
+        has = _buffer(store, "has", rec.shape[:2], np.bool_)
+        pick(collider_resolve, len(todo))(kind, P, X_old, rows, todo, m, float(t), float(h), backtrack,
+                                          collider.restitution, collider.friction, collider.max_bounces,
+                                          collider.samples, lipschitz, rec, has)
     rows = [np.flatnonzero(has[:len(todo), r]) for r in range(slots)]  # a loop over the rounds
     k = np.concatenate(rows)
     r = np.concatenate([np.full(len(q), c) for c, q in enumerate(rows)])
