@@ -359,7 +359,7 @@ def test_same_bits_on_one_and_two_threads():
             f_lo, f_hi = np.empty((mesh.m, 3)), np.empty((mesh.m, 3))
             from particles.backends._broad_kernels import corner_bounds  # noqa: PLC0415
             corner_bounds(v_lo, v_hi, mesh.faces, f_lo, f_hi)
-            keys = box_candidates(v_lo, v_hi, f_lo, f_hi, np.arange(mesh.n)[:, None], mesh.faces, False,
+            keys = box_candidates(v_lo, v_hi, f_lo, f_hi, cloth._own(mesh.n), mesh.faces, False,
                                   np.zeros(0, dtype=bool), False)
             rows = rows_of(k)
             hit, t = np.empty(len(rows), dtype=bool), np.full(len(rows), np.nan)
