@@ -82,8 +82,9 @@ given the system's ``derivative`` (in :meth:`particles.ParticleSystem.run`,
 inside a wrapper such as Provot's constraint or a collider, or called
 directly) takes the whole step from :func:`compiled_step`, one parallel pass
 over blocks of particles (:mod:`particles.backends._step_kernels`): each
-block copies the particles its springs touch into rows ``(x, v)``, computes
-its springs and bending joints, adds air damping, wind and gravity, and
+block reads the particles its springs touch from the state's rows ``(x, v)``
+(a state in Fortran order is copied to C order once, before the first
+step), computes its springs and bending joints, adds air damping, wind and gravity, and
 updates its own particles; clamps have a kernel of their own
 (:attr:`~particles.forces.fields.Force.compiled_role` says what each force is).
 Provot's pass and a collider's fix run compiled after the step, in place

@@ -114,8 +114,10 @@ def _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
         q_in, t_in = mask[Q].any(axis=1), mask[T].any(axis=1)
         t_list = np.flatnonzero(t_in)
         if int(q_in.sum()) * len(T) + len(Q) * len(t_list) <= GRID_TESTS * (len(Q) + len(T)):
-            return pick(touching_candidates, QUERY_WEIGHT * len(Q))(q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in,
+            keys = pick(touching_candidates, QUERY_WEIGHT * len(Q))(q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in,
                                                                     t_list)
+            keys.sort()  # each pair is found once, by one row
+            return keys
     return pick(box_candidates, QUERY_WEIGHT * len(Q))(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked)
 
 
