@@ -44,7 +44,7 @@ $(VENV)/.system-tools: .ci/install-system-tools | $(BIN)/python
 	touch $@
 
 # two workers (pytest-xdist), a test file per worker at a time: module fixtures (a graded corpus) run once
-# then the numba kernels, compiled once into the disk cache by two processes (about 50 s on a fresh clone,
+# then the numba kernels, compiled once into the disk cache by two processes (75 s on a fresh clone,
 # 2 s after): without it both test workers, and the notebooks they start, compile the same kernels. Only
 # a speed-up: if it fails, the tests compile what they use, as before
 test: $(VENV)/.installed-dev $(VENV)/.system-tools

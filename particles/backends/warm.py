@@ -1,7 +1,7 @@
 """Compile the kernels ahead of use: every compiled path of the library once, on small systems.
 
 numba compiles a kernel the first time it is called with new argument types
-(seconds per kernel, 103 s for all of them in one process on the 2-core machine) and keeps
+(seconds per kernel, 148 s for all of them in one process on the 2-core machine) and keeps
 the machine code in its disk cache (:mod:`particles.backends`). Without a
 warm cache, each new process pays again, and processes started at the same
 time (two test workers, a class's notebooks opened at once) each compile the
@@ -153,9 +153,11 @@ def _implicit():
 
 PARTS = {"explicit step": _explicit, "cloth collisions": _cloth_collisions, "constraints": _constraints,
          "pairs": _pairs, "implicit": _implicit}
-"""The parts of :func:`warm`, longest first (each took 48.5, 47.5, 12.8, 9.5 and 0.1 s to compile in
-``particles warm --jobs 2`` on a fresh clone on the 2-core machine, 2026-12-06, 61.8 s in all; the cloth
-collisions took 24-25 s before they included the folded sheet)."""
+"""The parts of :func:`warm`, longest first (each took 57.6, 63.2, 16.1, 9.2 and 0.0 s to compile in
+``particles warm --jobs 2`` on a fresh clone on the 2-core machine, 2026-12-07, 75.3 s in all. Each kernel
+is compiled for one memory order and one type of element table (C-ordered states, read-only index tables):
+compiled for both, the same parts took 96.7 s in all on a fresh clone the day before, and 183.5 s in one
+process against 148.3 s, on the same host in the same hour)."""
 
 
 def _part(name):
