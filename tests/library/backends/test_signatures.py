@@ -1,0 +1,129 @@
+"""Each kernel is compiled once, whatever the memory order of the state or the writability of an index table.
+
+numba compiles a kernel anew for each combination of argument types, and a
+Fortran-ordered array, a C-ordered one and a read-only one are three types.
+The compiled step's kernel took 7 to 12 s per variant to compile, the broad
+phase's largest 8 to 18 s: the library hands the kernels one form of each
+(C-ordered states, read-only element tables), converting once where it must.
+These tests give the library both forms and check that no kernel met a new
+type, and that the results have the same bits either way.
+"""
+
+import numpy as np
+import pytest
+
+from particles import backends
+from particles.collisions import Collider, Sphere, TriangleMesh
+from particles.constraints import ProvotConstraint
+from particles.massspring import cloth
+
+from .helpers import needs_numba
+
+pytestmark = needs_numba
+
+
+def _variants(*kernels):
+    """How many types each kernel (its parallel copy and its one-thread copy) has been compiled for, so far."""
+    return [len(k.signatures) + len(k.serial.signatures) for k in kernels]
+
+
+def _stretched(c):
+    """The system's state with every spring 30% too long and a velocity field: Provot's passes will correct it."""
+    X = c.state()
+    X[:, 0] *= 1.3
+    X[:, 1] = np.sin(7.0 * X[:, 0]) * 0.1
+    X[c.pinned, 1] = 0.0
+    return X
+
+
+def _runs(make_method, orders=("C", "F")):
+    """Two steps of a stretched 8 x 8 cloth from the same state held in each memory order: the end states."""
+    out = []
+    for order in orders:
+        c = cloth(8, 8, scaling="physical", damping=0.05)
+        c.set_state(np.asarray(_stretched(c), order=order), 0.0)
+        with backends.using("numba"):
+            out.append(c.run(2e-4, 1e-4, method=make_method(c))[1][-1])
+    return out
+
+
+def test_the_compiled_step_reads_a_fortran_ordered_state_without_a_kernel_of_its_own():
+    """A step from a C-ordered state (the compiled step's own) and from the same state in F order (a NumPy
+    step's, or set_state's): one kernel, the same bits."""
+    from particles.backends._step_kernels import symplectic_euler_steps
+
+    c = cloth(8, 8, scaling="physical", damping=0.05)
+    X = _stretched(c)
+    with backends.using("numba"):
+        step = backends.compiled_step(c)
+        c_step = step.symplectic_euler(np.ascontiguousarray(X), 0.0, 1e-4)  # the C-ordered variant from here on
+        before = _variants(symplectic_euler_steps)
+        f_step = step.symplectic_euler(np.asfortranarray(X), 0.0, 1e-4)
+    assert _variants(symplectic_euler_steps) == before
+    np.testing.assert_array_equal(f_step, c_step)
+
+
+@pytest.mark.parametrize("method", ["jacobi", "gauss-seidel"])
+def test_provot_corrects_a_fortran_ordered_state_in_place_without_kernels_of_its_own(method):
+    """Provot's pass on an F-ordered state (a NumPy step's) and on the same state in C order (the compiled step's):
+    no new kernel, the F-ordered array corrected in place, the same bits."""
+    from particles.backends import _provot_kernels as pk
+    from particles.backends.fixes import provot
+
+    kernels = [pk.provot_strains, pk.provot_start, pk.provot_end, pk.provot_average, pk.provot_group]
+    c = cloth(8, 8, scaling="physical")
+    constraint = ProvotConstraint.from_system(c, method=method, backend="numba")
+    X_c = np.ascontiguousarray(_stretched(c))
+    provot(constraint, X_c.copy(), 1e-3)  # the C-ordered variants exist from here on
+    before = _variants(*kernels)
+    X_f = np.asfortranarray(X_c)
+    f_result = provot(constraint, X_f, 1e-3)
+    assert _variants(*kernels) == before
+    assert f_result[1] > 0 and X_f.flags.f_contiguous  # passes were made, in the array given
+    assert provot(constraint, X_c, 1e-3) == f_result
+    np.testing.assert_array_equal(X_f, X_c)
+
+
+def test_the_collider_fixes_a_fortran_ordered_state_in_place_without_kernels_of_its_own():
+    """A sheet falling through a ball, its end state in F order and in C order: no new kernel, the same bits."""
+    from particles.backends import _collider_kernels as ck
+
+    def falling(c):
+        return Collider(Sphere([0.5, -0.3, 0.0], 0.3), restitution=0.0, friction=0.3).stepper(
+            "symplectic_euler", m=c.m, pinned=c.pinned)
+
+    c_run, = _runs(falling, orders=("C",))
+    before = _variants(ck.collider_candidates, ck.collider_resolve)
+    with backends.using("numba"):  # a NumPy step's state: Fortran-ordered (the step is NumPy's RK4)
+        c = cloth(8, 8, scaling="physical", damping=0.05)
+        collider = Collider(Sphere([0.5, -0.3, 0.0], 0.3), restitution=0.0, friction=0.3)
+        c.set_state(_stretched(c), 0.0)
+        c.run(2e-4, 1e-4, method=collider.stepper("rk4", m=c.m, pinned=c.pinned))
+    f_run, = _runs(falling, orders=("F",))
+    assert _variants(ck.collider_candidates, ck.collider_resolve) == before
+    np.testing.assert_array_equal(f_run, c_run)
+
+
+def test_vertex_face_and_edge_edge_searches_share_one_kernel():
+    """The vertices' one-vertex elements are read-only like the mesh's faces and edges: the vertex-face and the
+    edge-edge searches (with and without a mask) run the same compiled kernels."""
+    from particles.backends import _broad_kernels as bk
+    from particles.backends import cloth as compiled_cloth
+
+    mesh = TriangleMesh.grid(6, 6)
+    assert not compiled_cloth._own(mesh.n).flags.writeable and not mesh.edges.flags.writeable
+    x = np.random.default_rng(3).uniform(size=(mesh.n, 3))
+    lo, hi = x - 0.1, x + 0.1
+    masked = np.zeros(mesh.n, dtype=bool)
+    masked[[3, 17]] = True
+    searches = [bk.box_candidates, bk.touching_candidates]
+    (Q, T, same), *others = compiled_cloth._kinds(mesh)
+    boxes = compiled_cloth._boxes(lo, hi, Q, T, same)
+    assert not Q.flags.writeable
+    for mask, is_masked in ((masked, True), (np.zeros(0, dtype=bool), False)):  # the grid and the masked search
+        compiled_cloth._search(*boxes, Q, T, same, mask, is_masked)
+    before = _variants(*searches)
+    for Q, T, same in others:  # edges against edges
+        for mask, is_masked in ((masked, True), (np.zeros(0, dtype=bool), False)):
+            compiled_cloth._search(*compiled_cloth._boxes(lo, hi, Q, T, same), Q, T, same, mask, is_masked)
+    assert _variants(*searches) == before
