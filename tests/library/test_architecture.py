@@ -232,6 +232,8 @@ CONCEPT_TESTS = {
     "test_docstrings": "the numpydoc sections of the demos' and effects' public functions, over several packages",
     "test_solver_contract": "what both implicit solvers (BaraffWitkin, Prefactored) promise, each test over both",
     "test_steps": "steps in one compiled call: integrators/loop.py's batches through backends/compiled.py's kernel",
+    "test_signatures": "one compiled kernel per argument type, whatever form the callers get: the step of "
+                       "backends/compiled.py, the fixes of fixes.py, the searches of cloth.py",
 }
 
 
