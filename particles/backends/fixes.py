@@ -83,8 +83,8 @@ def provot(constraint, X, h):
     compiled strain pass and a compiled correction; a step whose springs
     all hold costs one strain pass.
     """
-    with _rows(X) as rows:
-        return _provot(constraint, rows, h)
+    with _rows(X) as X_c:
+        return _provot(constraint, X_c, h)
 
 
 def _provot(constraint, X, h):
@@ -177,13 +177,13 @@ def collide(collider, X_old, X, t, h, m, free):
     backtrack = collider.method == "backtrack"
     lipschitz = 0.0 if collider.surface.lipschitz is None else float(collider.surface.lipschitz)
     X_old = np.ascontiguousarray(X_old)
-    with _rows(X) as rows:
-        pick(collider_candidates, n)(kind, P, X_old, rows, free, float(h), backtrack, lipschitz, flag)
+    with _rows(X) as X_c:
+        pick(collider_candidates, n)(kind, P, X_old, X_c, free, float(h), backtrack, lipschitz, flag)
         todo = np.flatnonzero(flag)
         slots = collider.max_bounces + 1
         rec = _buffer(store, "rec", (max(len(todo), 16), slots, 1 + 4 * d))
         has = _buffer(store, "has", rec.shape[:2], np.bool_)
-        pick(collider_resolve, len(todo))(kind, P, X_old, rows, todo, m, float(t), float(h), backtrack,
+        pick(collider_resolve, len(todo))(kind, P, X_old, X_c, todo, m, float(t), float(h), backtrack,
                                           collider.restitution, collider.friction, collider.max_bounces,
                                           collider.samples, lipschitz, rec, has)
     rows = [np.flatnonzero(has[:len(todo), r]) for r in range(slots)]  # a loop over the rounds

@@ -153,7 +153,7 @@ def _implicit():
 
 PARTS = {"explicit step": _explicit, "cloth collisions": _cloth_collisions, "constraints": _constraints,
          "pairs": _pairs, "implicit": _implicit}
-"""The parts of :func:`warm`, longest first (each took 57.6, 63.2, 16.1, 9.2 and 0.0 s to compile in
+"""The parts of :func:`warm`, the two long ones first (each took 57.6, 63.2, 16.1, 9.2 and 0.0 s to compile in
 ``particles warm --jobs 2`` on a fresh clone on the 2-core machine, 2026-12-07, 75.3 s in all. Each kernel
 is compiled for one memory order and one type of element table (C-ordered states, read-only index tables):
 compiled for both, the same parts took 96.7 s in all on a fresh clone the day before, and 183.5 s in one
@@ -211,7 +211,7 @@ def warm(parts=None, jobs=1, report=None):
     start = time.perf_counter()
     if jobs == 1:
         done = map(_part, names)
-    else:  # the longest parts first (the order of PARTS), each to the next free process
+    else:  # in the order of PARTS (the two long parts first), each to the next free process
         import concurrent.futures
         import multiprocessing
 

@@ -36,17 +36,6 @@ def _stretched(c):
     return X
 
 
-def _runs(make_method, orders=("C", "F")):
-    """Two steps of a stretched 8 x 8 cloth from the same state held in each memory order: the end states."""
-    out = []
-    for order in orders:
-        c = cloth(8, 8, scaling="physical", damping=0.05)
-        c.set_state(np.asarray(_stretched(c), order=order), 0.0)
-        with backends.using("numba"):
-            out.append(c.run(2e-4, 1e-4, method=make_method(c))[1][-1])
-    return out
-
-
 def test_the_compiled_step_reads_a_fortran_ordered_state_without_a_kernel_of_its_own():
     """A step from a C-ordered state (the compiled step's own) and from the same state in F order (a NumPy
     step's, or set_state's): one kernel, the same bits."""
@@ -85,23 +74,28 @@ def test_provot_corrects_a_fortran_ordered_state_in_place_without_kernels_of_its
 
 
 def test_the_collider_fixes_a_fortran_ordered_state_in_place_without_kernels_of_its_own():
-    """A sheet falling through a ball, its end state in F order and in C order: no new kernel, the same bits."""
+    """A sheet's end state inside a ball, in F order (a NumPy step's) and in C order (the compiled step's): no
+    new kernel, the F-ordered array fixed in place, the same bits and the same contacts."""
     from particles.backends import _collider_kernels as ck
+    from particles.backends.fixes import collide
 
-    def falling(c):
-        return Collider(Sphere([0.5, -0.3, 0.0], 0.3), restitution=0.0, friction=0.3).stepper(
-            "symplectic_euler", m=c.m, pinned=c.pinned)
-
-    c_run, = _runs(falling, orders=("C",))
+    c = cloth(8, 8, scaling="physical")
+    collider = Collider(Sphere([0.5, 0.32, -0.5], 0.3), restitution=0.0, friction=0.3)  # 2 cm off the sheet
+    X_old = np.ascontiguousarray(c.state())
+    X_end = X_old.copy()
+    X_end[:, 0, 1] += 0.05  # every particle 5 cm towards the ball: those facing it end inside
+    free = ~np.isin(np.arange(c.n), c.pinned)
+    m = np.ascontiguousarray(c.m, dtype=float)
+    X_c = X_end.copy()
+    c_contacts = collide(collider, X_old, X_c, 0.0, 1e-2, m, free)  # the C-ordered variants from here on
     before = _variants(ck.collider_candidates, ck.collider_resolve)
-    with backends.using("numba"):  # a NumPy step's state: Fortran-ordered (the step is NumPy's RK4)
-        c = cloth(8, 8, scaling="physical", damping=0.05)
-        collider = Collider(Sphere([0.5, -0.3, 0.0], 0.3), restitution=0.0, friction=0.3)
-        c.set_state(_stretched(c), 0.0)
-        c.run(2e-4, 1e-4, method=collider.stepper("rk4", m=c.m, pinned=c.pinned))
-    f_run, = _runs(falling, orders=("F",))
+    X_f = np.asfortranarray(X_end)
+    f_contacts = collide(collider, np.asfortranarray(X_old), X_f, 0.0, 1e-2, m, free)
     assert _variants(ck.collider_candidates, ck.collider_resolve) == before
-    np.testing.assert_array_equal(f_run, c_run)
+    assert len(c_contacts[0]) > 0 and X_f.flags.f_contiguous  # contacts were fixed, in the array given
+    np.testing.assert_array_equal(X_f, X_c)
+    for a, b in zip(f_contacts, c_contacts):
+        np.testing.assert_array_equal(a, b)
 
 
 def test_vertex_face_and_edge_edge_searches_share_one_kernel():
