@@ -3,8 +3,9 @@
 Submissions of one exercise are graded in batches: one pytest process per
 batch (its start-up and the reference library are paid once per batch), and
 one worker process per submission inside it. ``grade`` splits the notebooks
-of an exercise into about six batches (three per job, counting at least two
-jobs) of at most 20, so the batches are independent and two jobs on a 2-core
+into batches of one exercise, at most 20, each about a ``2 * jobs``-th of the
+notebooks not yet batched (guided self-scheduling: large batches first, small
+ones at the end), so the batches are independent and two jobs on a 2-core
 machine should approach a 2x speed-up. The 50 notebooks are a mix from the
 grader's corpus (correct variants, the master, the stub and quick-failing
 wrong answers; no timeouts, which would measure sleeping rather than

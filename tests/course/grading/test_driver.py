@@ -15,7 +15,7 @@ import corpus  # noqa: E402
 
 from particles.course.walls import isolation  # noqa: E402
 from particles.course.grading.discovery import Unit  # noqa: E402
-from particles.course.grading.driver import LibraryChanged, grade, grade_batch  # noqa: E402
+from particles.course.grading.driver import LibraryChanged, _batches, grade, grade_batch  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -267,3 +267,25 @@ def test_resume_grades_again_the_records_of_a_changed_test(tmp_path, monkeypatch
     assert grade([subs], out, resume=True, **options)["resumed"] == 0 and sorted(graded) == ["alice", "bob"]
     record = json.loads((out / "records" / "alice__00_warmup.json").read_text())
     assert record["tests_version"].endswith(" library=new")
+
+
+@pytest.mark.parametrize("jobs", [1, 2, 4])
+@pytest.mark.parametrize("sizes", [[15, 20, 17, 17, 14, 12], [17], [300], [1], [2, 1, 3]])
+def test_batches_cover_every_notebook_once_large_first_one_exercise_each(sizes, jobs):
+    """Batches keep the notebooks' order, one exercise each, at most 20; none of one beside a larger one of its
+    exercise; one exercise's batches never grow; and a run of many notebooks over several exercises takes
+    fewer sessions than six per exercise (each session costs about 1 s to start)."""
+    units = [Unit(f"s{e}_{k}", f"{e:02d}_topic", Path(f"s{e}_{k}.ipynb"))
+             for e, n in enumerate(sizes) for k in range(n)]
+    batches = _batches(units, jobs)
+    assert [u for b in batches for u in b] == units
+    assert all(0 < len(b) <= 20 and len({u.exercise for u in b}) == 1 for b in batches)
+    for exercise in {u.exercise for u in units}:
+        mine = [len(b) for b in batches if b[0].exercise == exercise]
+        assert mine == [1] or 1 not in mine, mine
+    if len(sizes) == 1:  # one exercise: sizes never grow, so the run ends on small batches
+        assert all(a >= b for a, b in zip(map(len, batches), map(len, batches[1:])))
+    if len(units) >= 60:
+        assert len(batches) >= 2 * jobs
+    if len(sizes) > 1 and len(units) >= 60:
+        assert len(batches) < 6 * len(sizes)
