@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from particles.course.reading.submission import SubmissionCode
-from particles.course.release.notebooks import provided_cells
+from particles.course.reading.provided import provided_cells
 from particles.course.worker.runner import GradingFailure, Submission
 
 FORBIDDEN = {"particles.integrators.euler": "it is the step you are asked to write"}

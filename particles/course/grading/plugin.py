@@ -75,13 +75,13 @@ import numpy as np
 import pytest
 
 from ..reading.submission import SubmissionCode, notebook_cells
+from ..reading.provided import provided_cells
 from .figures import Feedback
 from ..walls.isolation import Plan, protect_this_process
 from ..results.signing import TOKEN_FD, sign_records
 from ..paths import project_root
 from .blame import blame, function_of, stub_functions
 from ..results.records import SessionRecord, TestRecord
-from ..release.notebooks import provided_cells
 from ..walls.limits import check_limit
 from ..worker.runner import GradingFailure, Submission
 

@@ -239,7 +239,7 @@ class SubmissionCode:
             Labels and sources of the code cells.
         provided : iterable of str, optional
             Sources of the cells the course provides (see
-            :func:`particles.course.release.notebooks.provided_cells`). A cell whose
+            :func:`particles.course.reading.provided.provided_cells`). A cell whose
             source is one of them, up to trailing white space, is the course's:
             its statements may use what the exercise forbids, and its errors
             are not the student's (:meth:`student_load_errors`). A cell the
