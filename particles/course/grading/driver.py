@@ -121,6 +121,10 @@ def _environment(root):
     env["PARTICLES_COURSE_ROOT"] = str(root)
     # the sessions' bytecode lives in a folder only the grader may write, never in the library's __pycache__
     env["PYTHONPYCACHEPREFIX"] = str(_private_folder("particles-grader-pycache"))
+    # only the grader's plugin (named with -p): a plugin installed beside pytest would change the sessions
+    # (pytest-randomly reorders the tests and reseeds the generators), and loading them (pytest-xdist,
+    # platformdirs' own) took a tenth of a session's start
+    env["PYTEST_DISABLE_PLUGIN_AUTOLOAD"] = "1"
     env.pop("PYTHONDONTWRITEBYTECODE", None)
     return env
 

@@ -289,3 +289,26 @@ def test_batches_cover_every_notebook_once_large_first_one_exercise_each(sizes, 
         assert len(batches) >= 2 * jobs
     if len(sizes) > 1 and len(units) >= 60:
         assert len(batches) < 6 * len(sizes)
+
+
+def test_plugins_installed_beside_pytest_do_not_join_the_grading_sessions(tmp_path, monkeypatch):
+    """A pytest plugin installed in the grader's environment (here one that fails every session it joins, found
+    through its distribution's ``pytest11`` entry point, as pytest-randomly would be) is not loaded by the
+    grading sessions: the master still gets full marks."""
+    site = tmp_path / "site"
+    (site / "evil_plugin-1.0.dist-info").mkdir(parents=True)
+    (site / "evil_plugin-1.0.dist-info" / "METADATA").write_text("Metadata-Version: 2.1\nName: evil-plugin\nVersion: 1.0\n")
+    (site / "evil_plugin-1.0.dist-info" / "entry_points.txt").write_text("[pytest11]\nevil = evil_plugin\n")
+    (site / "evil_plugin.py").write_text(
+        "import pathlib\n"
+        f"def pytest_configure(config):\n    pathlib.Path({str(tmp_path / 'joined')!r}).write_text('x')\n"
+        "def pytest_collection_modifyitems(items):\n    items.reverse()\n    raise SystemExit(4)\n")
+    monkeypatch.setenv("PYTHONPATH", str(site))
+    probe = subprocess.run([sys.executable, "-m", "pytest", "--co", "-q", "-p", "no:cacheprovider", str(tmp_path)],
+                           capture_output=True, text=True, cwd=tmp_path)
+    assert (tmp_path / "joined").exists(), probe.stdout + probe.stderr  # an ordinary pytest loads it
+    (tmp_path / "joined").unlink()
+    _write(tmp_path / "subs", "honest", corpus.MASTER.read_text())
+    (record,) = grade_batch([Unit("honest", "00_warmup", tmp_path / "subs" / "honest_00_warmup.ipynb")], ROOT, seeds=[7])
+    assert record["complete"] and all(t["passed"] for t in record["tests"]), record["tests"]
+    assert not (tmp_path / "joined").exists()
