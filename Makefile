@@ -8,7 +8,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 OUT    ?= out
 
-.PHONY: demo test lab bench clean
+.PHONY: demo test kernels lab bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -43,13 +43,18 @@ $(VENV)/.system-tools: .ci/install-system-tools | $(BIN)/python
 	sh .ci/install-system-tools
 	touch $@
 
-# two workers (pytest-xdist), a test file per worker at a time: module fixtures (a graded corpus) run once
-# then the numba kernels, compiled once into the disk cache by two processes (75 s on a fresh clone,
-# 2 s after): without it both test workers, and the notebooks they start, compile the same kernels. Only
-# a speed-up: if it fails, the tests compile what they use, as before
-test: $(VENV)/.installed-dev $(VENV)/.system-tools
+# numba's kernels, compiled once into the disk cache by two processes (60-75 s on a fresh clone, 2 s
+# after): without it both test workers, and the notebooks they start, compile the same kernels. Only a
+# speed-up: if it fails, the tests compile what they use, as before
+kernels: $(VENV)/.installed-dev
 	$(BYTECODE)
 	$(BIN)/particles warm --jobs 2 || echo "particles warm failed: the tests will compile the kernels they use"
+
+# the set-up's two long parts side by side: the system tools (apt-get: the network and the disk, on a
+# fresh machine) while the kernels compile (the CPU); then two workers (pytest-xdist), a test file per
+# worker at a time: module fixtures (a graded corpus) run once
+test:
+	$(MAKE) --no-print-directory -j 2 $(VENV)/.system-tools kernels
 	$(BIN)/python -m pytest -n 2 --dist loadfile
 
 lab: $(VENV)/.installed-lab
