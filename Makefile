@@ -43,7 +43,7 @@ $(VENV)/.system-tools: .ci/install-system-tools | $(BIN)/python
 	sh .ci/install-system-tools
 	touch $@
 
-# numba's kernels, compiled once into the disk cache by two processes (60-75 s on a fresh clone, 2 s
+# numba's kernels, compiled once into the disk cache by two processes (57-75 s on a fresh clone, 2 s
 # after): without it both test workers, and the notebooks they start, compile the same kernels. Only a
 # speed-up: if it fails, the tests compile what they use, as before
 kernels: $(VENV)/.installed-dev

@@ -45,6 +45,7 @@ notebook rejected there is never given to a session: its record fails every
 test of the exercise's catalog with the one-line reason.
 """
 
+import itertools
 import json
 import math
 import os
@@ -317,14 +318,15 @@ def _batches(units, jobs, largest=20):
         by_exercise.setdefault(unit.exercise, []).append(unit)
     out, left = [], len(units)
     for group in by_exercise.values():
-        k = 0
-        while k < len(group):
-            rest = len(group) - k
+        sizes, rest = [], len(group)
+        while rest:
             size = min(largest, rest, max(2, math.ceil(left / (2 * max(jobs, 1)))))
-            if 0 < rest - size < 2 and rest <= largest:  # no batch of one left behind
-                size = rest
-            out.append(group[k:k + size])
-            k, left = k + size, left - size
+            if rest - size == 1:  # no batch of one left behind: take it too, or leave two
+                size = rest if rest <= largest else size - 1
+            sizes.append(size)
+            rest, left = rest - size, left - size
+        starts = list(itertools.accumulate(sorted(sizes, reverse=True), initial=0))  # a tail that grew goes first
+        out += [group[a:b] for a, b in zip(starts[:-1], starts[1:])]
     return out
 
 

@@ -7,7 +7,7 @@ exercise's master, or from its released notebook when the master is not there.
 
 from pathlib import Path
 
-from ..release.answers import BEGIN
+from ..release.answers import BEGIN, STUB_LINE
 from .submission import notebook_cells
 
 __all__ = ["provided_cells"]
@@ -19,7 +19,7 @@ def provided_cells(root, exercise):
     Read from the master ``solutions/NN_topic.ipynb`` when there is one (its
     instructor-only cells included: they are the course's too, when a master
     is checked), else from the released ``exercises/NN_topic.ipynb``
-    (code cells without the release's ``# YOUR CODE HERE``). The grader lets
+    (code cells without the release's stub line, :data:`~particles.course.release.answers.STUB_LINE`). The grader lets
     these cells, when a submission keeps them unchanged, use what the exercise
     forbids, and does not count their errors as the student's
     (:meth:`~particles.course.reading.submission.SubmissionCode.from_cells`).
@@ -40,7 +40,7 @@ def provided_cells(root, exercise):
         if master_path.exists():
             return [source for _, source in notebook_cells(master_path) if BEGIN not in source]
         if released_path.exists():
-            return [source for _, source in notebook_cells(released_path) if "# YOUR CODE HERE" not in source]
+            return [source for _, source in notebook_cells(released_path) if STUB_LINE not in source]
     except ValueError:
         return []
     return []

@@ -30,13 +30,14 @@ import json
 import re
 from pathlib import Path
 
-__all__ = ["ANSWER_PROMPT", "cell_source", "SLOT_KEY", "DEFAULT_POINTS", "slot_of", "answer_slots", "questions_of",
+__all__ = ["ANSWER_PROMPT", "STUB_LINE", "cell_source", "SLOT_KEY", "DEFAULT_POINTS", "slot_of", "answer_slots", "questions_of",
            "question_points", "count_answers", "answers_of", "answer_cells", "model_answers", "is_blank",
            "solution_parts", "answers_note"]
 
 ANSWER_PROMPT = "*Your answer here.*"
 BEGIN = "### BEGIN SOLUTION"  # the markers of a master's solution blocks (particles.course.release.notebooks uses them)
 END = "### END SOLUTION"
+STUB_LINE = "# YOUR CODE HERE"  # the release writes it where a code solution block was; the grader reads it
 SLOT_KEY = "answer"  # under the cell metadata's "particles"
 _QUESTION = re.compile(r"^\s*\*\*Question\s*([0-9]+)?[^*]*\*\*", re.M)
 _POINTS = re.compile(r"\(\s*([0-9]+(?:\.[0-9]+)?)\s+points?\s*\)")

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import nbformat
 
-from .answers import ANSWER_PROMPT, BEGIN, END, SLOT_KEY, solution_parts
+from .answers import ANSWER_PROMPT, BEGIN, END, SLOT_KEY, STUB_LINE, solution_parts
 from ..paths import exercise_tests
 
 __all__ = ["BEGIN", "END", "INSTRUCTOR", "ReleaseError", "release_notebook", "render", "release",
@@ -70,7 +70,7 @@ def _strip_solutions(source, kind, where):
             if kind == "code":
                 name = _enclosing_function(lines, k, indent)
                 what = f"{name} is not written yet" if name else "this part is not written yet"
-                out.append(f"{indent}# YOUR CODE HERE")
+                out.append(f"{indent}{STUB_LINE}")
                 out.append(f'{indent}raise NotImplementedError("{what}")')
             else:
                 out.append(ANSWER_PROMPT)

@@ -270,7 +270,7 @@ def test_resume_grades_again_the_records_of_a_changed_test(tmp_path, monkeypatch
 
 
 @pytest.mark.parametrize("jobs", [1, 2, 4])
-@pytest.mark.parametrize("sizes", [[15, 20, 17, 17, 14, 12], [17], [300], [1], [2, 1, 3]])
+@pytest.mark.parametrize("sizes", [[15, 20, 17, 17, 14, 12], [17], [300], [1], [2, 1, 3], [21], [41, 3]])
 def test_batches_cover_every_notebook_once_large_first_one_exercise_each(sizes, jobs):
     """Batches keep the notebooks' order, one exercise each, at most 20; none of one beside a larger one of its
     exercise; one exercise's batches never grow; and a run of many notebooks over several exercises takes
