@@ -186,9 +186,13 @@ def number_forms(record):
 
 
 def shown_numbers(reason, record):
-    """The drawn numbers of `record` (as formatted) that `reason` shows as whole numbers, sorted."""
+    """The drawn numbers of `record` (as formatted) that `reason` shows as whole numbers, sorted.
+
+    A number is shown when it stands on its own: not inside a longer number, a word or a path (a
+    checkout in ``/tmp/ci102/`` named in a message is no draw of 102).
+    """
     found = []
     for text in number_forms(record):
-        if re.search(rf"(?<![\d.]){re.escape(text)}(?![\d]|\.\d)", reason):
+        if re.search(rf"(?<![\w./]){re.escape(text)}(?![\d/]|\.\d)", reason):
             found.append(text)
     return sorted(found)

@@ -121,6 +121,19 @@ def test_figures_and_messages_show_the_same_numbers(graded, exercise):
     assert not disagree, disagree
 
 
+@pytest.mark.parametrize("reason, shown", [
+    ("expected 102 particles, got 101", ["102"]),
+    ("n=102, h=0.25", ["102"]),
+    ("a step of -102.00 s", ["102.00"]),
+    ("took 1102 steps; 102.5 m; 3.102 m", []),  # inside longer numbers
+    ("fails its tripwires: /tmp/ci102/particles/integrators/steppers.py", []),  # a folder of the checkout
+    ("the variable x102 is unset", []),  # a name
+])
+def test_a_drawn_number_is_shown_on_its_own_not_inside_a_number_word_or_path(reason, shown):
+    """The leak detector finds a draw standing on its own, and not digits of a longer number, a name or a path."""
+    assert exercise_corpus.shown_numbers(reason, {"scalars": [102.0], "arrays": []}) == shown
+
+
 @pytest.mark.parametrize("exercise", EXERCISES)
 def test_hidden_messages_never_show_random_parameters(graded, exercise):
     """No failure message of a hidden test shows a number its random generator drew, in any usual format."""
