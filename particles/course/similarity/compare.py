@@ -248,13 +248,29 @@ def _delegates(func):
     return len(body) == 1 and isinstance(body[0], ast.Return) and isinstance(body[0].value, ast.Call)
 
 
+def _sources(folder):
+    """The library's source files (``particles/`` except ``particles/course/``), sorted."""
+    folder = Path(folder)
+    return [path for path in sorted(folder.rglob("*.py"))
+            if not ({"course", "__pycache__"} & set(path.relative_to(folder.parent).parts[1:-1]))]
+
+
 def _library(folder):
-    """The library's functions, and (its top-level defs and classes, its re-exports) for :class:`Context`."""
+    """The library's functions, and (its top-level defs and classes, its re-exports) for :class:`Context`.
+
+    Parsed once per process for each state of the sources (about 2 s): a file that changes (its size or
+    modification time) parses them again.
+    """
+    stamps = tuple((str(p), p.stat().st_mtime_ns, p.stat().st_size) for p in _sources(folder))
+    return _parsed_library(str(folder), stamps)
+
+
+@lru_cache(maxsize=2)
+def _parsed_library(folder, stamps):
+    """:func:`_library` for the sources whose ``(path, mtime, size)`` are `stamps` (the cache's key)."""
     folder, modules, defs, reexports = Path(folder), [], set(), {}
-    for path in sorted(folder.rglob("*.py")):
+    for path in (Path(p) for p, _, _ in stamps):  # a loop over the library's files
         rel = path.relative_to(folder.parent)
-        if "course" in rel.parts[1:-1] or "__pycache__" in rel.parts:
-            continue
         module = ".".join(rel.with_suffix("").parts).removesuffix(".__init__")
         package = module if path.name == "__init__.py" else module.rpartition(".")[0]
         tree = ast.parse(path.read_text(encoding="utf-8"))
