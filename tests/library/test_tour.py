@@ -4,8 +4,10 @@ The tour writes each study of ``particles study`` (particles.studies.report) wit
 studies' files and key numbers are checked here, on one run of the tour (about 30 s), not again.
 """
 
+import contextlib
 import csv
 import inspect
+import io
 import re
 
 import pytest
@@ -19,9 +21,6 @@ from particles.tour import force_field_scene, lennard_jones_costs
 @pytest.fixture(scope="module")
 def tour(tmp_path_factory):
     """``particles tour`` run once: ``(out folder, printed lines)``."""
-    import contextlib
-    import io
-
     out = tmp_path_factory.mktemp("tour")
     printed = io.StringIO()
     with contextlib.redirect_stdout(printed):

@@ -444,10 +444,10 @@ def grade(paths, out=None, *, jobs=1, exercise=None, public_only=False, seed=Non
         raise ValueError("student needs out (the folder whose records/ an earlier run wrote) and no resume")
     deadlines = find_course(root, list(tests), course)
     submitted = SubmissionTimes(metadata, times)
-    # the tests' versions before anything is graded, for --resume's comparison with the kept records (each
-    # batch takes its own for its records); without resume none is compared
-    library = library_digest() if resume else None
-    versions = {name: tests_version(root, name, library) for name in tests} if resume else {}
+    versions = {}  # the tests' versions before anything is graded, for --resume's comparison with the kept records
+    if resume:  # (each batch takes its own for its records)
+        library = library_digest()
+        versions = {name: tests_version(root, name, library) for name in tests}
     time_limit = None if time_limit is None else check_limit("time_limit", time_limit)
     memory_mb = None if memory_mb is None else check_limit("memory_mb", memory_mb)
     # ValueError or IsolationUnavailable before anything is graded (a Plan itself: for tests and benchmarks)

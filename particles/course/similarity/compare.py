@@ -261,7 +261,7 @@ def _library(folder):
     Parsed once per process for each state of the sources (about 2 s): a file that changes (its size or
     modification time) parses them again.
     """
-    stamps = tuple((str(p), p.stat().st_mtime_ns, p.stat().st_size) for p in _sources(folder))
+    stamps = tuple((str(p), s.st_mtime_ns, s.st_size) for p, s in ((p, p.stat()) for p in _sources(folder)))
     return _parsed_library(str(folder), stamps)
 
 
