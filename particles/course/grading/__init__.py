@@ -2,8 +2,18 @@
 
 Modules:
 
-* :mod:`~particles.course.grading.driver`: ``particles grade``: batches of pytest sessions, records,
-  reports;
+* :mod:`~particles.course.grading.driver`: ``particles grade``: the grading run, its stages strung
+  together;
+* :mod:`~particles.course.grading.options`: the options of a run, one typed object checked once;
+* :mod:`~particles.course.grading.plan`: the batches of a run and each notebook's seed;
+* :mod:`~particles.course.grading.run`: where batches are graded (a runner: this machine's cores), a
+  lost batch retried;
+* :mod:`~particles.course.grading.session`: one pytest session grading a batch; its signed records
+  read back;
+* :mod:`~particles.course.grading.record`: each result decided, saved (a recorder: the records
+  folder) and reported as it arrives;
+* :mod:`~particles.course.grading.report`: the gradebook, feedback and Gradescope file at the end of
+  a run;
 * :mod:`~particles.course.grading.plugin`: the pytest plugin: points, hidden tests, seeds, records
   of a session;
 * :mod:`~particles.course.grading.discovery`: which notebooks are graded, as which student and

@@ -45,7 +45,7 @@ from datetime import date, datetime, time, timedelta, timezone
 from pathlib import Path
 
 __all__ = ["LatePolicy", "Course", "load_course", "find_course", "decide", "apply_late", "SubmissionTimes",
-           "read_times", "read_gradescope_metadata", "parse_time", "COURSE_FILE"]
+           "LateWork", "read_times", "read_gradescope_metadata", "parse_time", "COURSE_FILE"]
 
 COURSE_FILE = "course.toml"
 """The course file's name at the course root."""
@@ -456,3 +456,25 @@ class SubmissionTimes:
         except OSError:
             return None, ""
         return datetime.fromtimestamp(mtime, tz=timezone.utc), "the notebook file's modification time"
+
+
+class LateWork:
+    """The late-work decision of each record of a run: the deadline from the course, the time from `times`.
+
+    Parameters
+    ----------
+    course : Course or None
+        The course file's deadlines (:func:`find_course`).
+    times : SubmissionTimes
+    units : iterable of Unit
+        The run's notebooks; a record is decided with the time of its own.
+    """
+
+    def __init__(self, course, times, units):
+        self.course, self.times = course, times
+        self.units = {(unit.student, unit.exercise): unit for unit in units}
+
+    def __call__(self, record):
+        """Set ``record.late`` (see :func:`apply_late`) and return `record`."""
+        when, source = self.times.of(self.units[(record.student, record.exercise)])
+        return apply_late(record, self.course, when, source, self.times.aliases())

@@ -45,7 +45,7 @@ Fixtures:
 Options: ``--submission NOTEBOOK`` (default: ``solutions/NN_topic.ipynb`` when
 it exists, the master, else ``exercises/NN_topic.ipynb``, the student's own
 copy), ``--grading-seed``, ``--public-only``, ``--grading-results FILE``
-(one JSON record per test, read by :mod:`particles.course.grading.driver`),
+(one JSON record per test, read by :mod:`particles.course.grading.session`),
 ``--grading-batch FILE`` (several notebooks, each with its own seed, graded
 one after the other in this session, each by its own worker: the pytest
 start-up and the reference library are paid once per batch),
@@ -58,7 +58,7 @@ submission's record). Without them, ``pytest tests/exercises`` grades
 the masters, which must score full marks.
 
 When the driver passes a signing key (see
-:data:`particles.course.grading.driver.TOKEN_FD`), the records file holds
+:data:`particles.course.results.signing.TOKEN_FD`), the records file holds
 ``{"body": JSON text, "signature": HMAC of it}``; the driver trusts it only
 with a valid signature and a pytest exit status of 0 or 1.
 """

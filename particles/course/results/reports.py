@@ -17,7 +17,7 @@ gradebook; in Gradescope's output each written question is an entry of its own, 
 manual grading when no rubric graded it (:func:`gradescope_results`).
 
 :func:`write_outputs` writes them all into a grading run's folder, per student, as its records come in
-(the driver calls it after each batch, under its lock).
+(the driver calls it after each batch, :mod:`particles.course.grading.report`).
 """
 
 import csv

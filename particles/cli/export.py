@@ -1,0 +1,61 @@
+"""``particles export OUT --roster FILE``: the grades of a graded folder for Canvas and Moodle."""
+
+import sys
+
+
+def _warn(done, export, moodle_id):
+    """The problems of an export, on stderr; True when a record or a student was left out."""
+    for student in done["name_only"]:
+        print(f"warning: {student.submission_name} (roster line {student.line}) has no Canvas ID, SIS User ID or "
+              "SIS Login ID: Canvas can match it only by name", file=sys.stderr)
+    for name, record in export.unmatched:
+        print(f"not on the roster: {record.student} ({record.exercise}, {record.total:g}/{record.total_max:g} "
+              f"points, records/{name}): not exported", file=sys.stderr)
+    for fmt, students in done["left_out"].items():
+        for student in students:
+            print(f"left out of the {fmt} file: {student.submission_name} (roster line {student.line}) has no "
+                  f"{moodle_id}", file=sys.stderr)
+    return bool(export.unmatched or any(done["left_out"].values()))
+
+
+def run(args):
+    from ..course.results.lms import ExportError, RosterError, export_grades
+
+    try:
+        done = export_grades(args.out, args.roster, canvas=args.canvas, moodle=args.moodle,
+                             name_column=args.name_column, moodle_id=args.moodle_id)
+    except (RosterError, ExportError, ValueError) as error:
+        print(f"particles export: {error}", file=sys.stderr)
+        return 2
+    export = done["export"]
+    print(f"{len(export.students)} students on the roster; exercises: {', '.join(export.exercises) or 'none'}")
+    for fmt, path in done["files"].items():
+        left = len(done["left_out"].get(fmt, []))
+        print(f"wrote {path} ({fmt}): {len(export.students) - left} students")
+    for student, exercise in export.missing():
+        print(f"missing: {student.submission_name} has no graded {exercise}: exported as 0")
+    left_out = _warn(done, export, args.moodle_id)
+    print(f"report: {done['report']}")
+    return 1 if left_out else 0
+
+
+def register(commands):
+    export = commands.add_parser(
+        "export", help="write the grades of a graded folder for Canvas and Moodle",
+        description="Read OUT/records (written by `particles grade --out OUT`) and write Canvas's and Moodle's "
+        "gradebook import CSVs: one row per student of the roster, one column per exercise (tests + written "
+        "answers - late penalty) and a total. A roster student without a record gets 0 (\"missing\"); every "
+        "problem is listed in OUT/lms-report.csv. Exit status 0; 1 when a record's student is not on the roster "
+        "or a student was left out of a file; 2 on a bad roster or unreadable records.")
+    export.add_argument("out", metavar="OUT", help="the output folder of a grading run")
+    export.add_argument("--roster", required=True, help="CSV: submission_name and the students' LMS identifiers "
+                        "(canvas_id, sis_user_id, sis_login_id, section, email, username, idnumber); Canvas's "
+                        "gradebook export also works, with --name-column")
+    export.add_argument("--canvas", metavar="FILE", help="write Canvas's gradebook import CSV here")
+    export.add_argument("--moodle", metavar="FILE", help="write Moodle's grade import CSV here")
+    export.add_argument("--name-column", default="submission_name",
+                        help="the roster's column of the names the grader files submissions under "
+                             "(default submission_name)")
+    export.add_argument("--moodle-id", choices=["email", "username", "idnumber"], default="email",
+                        help="the identifier of the Moodle file (default email)")
+    export.set_defaults(run=run)

@@ -1,0 +1,43 @@
+"""``particles review``: one page per written question with every student's answer, and a rubric to fill in."""
+
+import sys
+from pathlib import Path
+
+from .common import add_root, course_root
+
+
+def run(args):
+    from ..course.results.review import write_review
+
+    try:
+        summary = write_review(args.submissions, args.out, root=course_root(args), exercise=args.exercise)
+    except ValueError as error:  # an unknown exercise, a master's unreadable points, a file in the way
+        print(f"particles review: {error}", file=sys.stderr)
+        return 2
+    for problem in summary["problems"]:
+        print(f"not reviewed: {problem}", file=sys.stderr)
+    if not summary["pages"]:
+        print("particles review: no written answers to review", file=sys.stderr)
+        return 1
+    print(f"wrote {len(summary['pages'])} question pages of {summary['students']} students: "
+          f"{Path(args.out) / 'index.html'}")
+    for path in summary["rubrics"]:
+        print(f"rubric to fill in: {path}")
+    if summary["kept"]:
+        print(f"kept {summary['kept']} graded row(s) already in the rubrics")
+    print(f"then: particles grade ... --rubric {args.out}")
+    return 0
+
+
+def register(commands):
+    review = commands.add_parser(
+        "review", help="write one page per written question with every student's answer, and a rubric (CSV) to "
+        "fill in", description="For each exercise and written question, write DIR/<exercise>/question-<k>.html "
+        "(every student's answer side by side, with the figures it refers to; self-contained, no scripts) and "
+        "DIR/<exercise>/rubric.csv (points and comments to fill in; rows already filled are kept), then grade "
+        "with `particles grade ... --rubric DIR`.")
+    review.add_argument("submissions", nargs="+", metavar="SUBMISSION", help="a notebook or a folder of them")
+    review.add_argument("--out", required=True, metavar="DIR", help="the folder to write the pages and rubrics to")
+    review.add_argument("--exercise", help="read every notebook as this exercise (as `particles grade` does)")
+    add_root(review)
+    review.set_defaults(run=run)

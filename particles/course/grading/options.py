@@ -1,0 +1,164 @@
+"""The options of one grading run: one typed object, checked once, read by the stages that need them.
+
+``particles grade`` builds a :class:`GradeOptions` from its command line; :func:`~particles.course.grading.driver.grade`
+builds one from its keyword arguments. Every check of a value the instructor gave happens here, when the
+object is made, so that a run with a bad option stops before anything is read or graded.
+"""
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..paths import exercise_tests, project_root
+from ..walls.limits import check_limit
+
+__all__ = ["GradeOptions", "VISIBILITIES"]
+
+VISIBILITIES = ("hidden", "after_due_date", "after_published", "visible")
+"""Gradescope's visibilities of a test."""
+
+
+def _paths(values):
+    return tuple(Path(v) for v in values)
+
+
+def _optional_path(value):
+    return None if value is None else Path(value)
+
+
+@dataclass(frozen=True)
+class GradeOptions:
+    """What one grading run is asked to do.
+
+    Parameters
+    ----------
+    paths : sequence of path
+        Notebooks, folders of notebooks, zips of them (LMS exports; see
+        :mod:`particles.course.grading.discovery`).
+    out : path, optional
+        Output folder: ``gradebook.csv``, ``<student>/results.json``, ``<student>/feedback.md`` and
+        ``<student>/feedback.html``, ``records/`` (one record per notebook, written as soon as it is
+        graded) and ``logs/``. Nothing is written without it.
+    jobs : int
+        Notebooks graded at the same time (each takes one core).
+    exercise : str, optional
+        Grade every notebook as this exercise.
+    public_only : bool
+        Run only the public tests.
+    seed : int, optional
+        Seed of the hidden tests' random parameters (default: a new random seed per notebook,
+        recorded in the results).
+    time_limit, memory_mb : float, optional
+        Per-call time limit (s) of the tests without their own ``time_limit`` marker, and memory (MiB)
+        of the student's code; finite and > 0.
+    root : path, optional
+        The course folder (default: found from the current directory).
+    private : sequence of path
+        More paths the submissions may not read (on top of the course folder, the submissions and `out`).
+    hidden_visibility : str
+        Gradescope visibility of hidden tests, one of :data:`VISIBILITIES`.
+    python : str, optional
+        The interpreter of the grading sessions (default: this one).
+    gradescope : path, optional
+        Also write one combined Gradescope ``results.json`` for all the notebooks graded here.
+    isolation : {"auto", "strict"} or Plan
+        The workers' operating-system walls (see :mod:`particles.course.walls.isolation`).
+    resume : bool
+        Keep the records of notebooks that have not changed since an earlier run; grade the rest.
+    audit_hook : bool
+        False leaves the workers with the operating system's walls only: for tests of those walls.
+    rubric : sequence of path
+        Rubric files (or folders of them) of the written answers.
+    course : path, optional
+        The course file of deadlines and late policies (default: ``course.toml`` at `root`).
+    times : path, optional
+        A CSV ``student,exercise,submitted`` of submission times.
+    metadata : path, optional
+        Gradescope's ``submission_metadata.json``: its ``created_at`` is the time of every notebook.
+    students : sequence of str, optional
+        Regrade only these students' notebooks (needs `out` with the records of an earlier run).
+    limits : particles.course.grading.intake.Limits, optional
+        What a notebook and a zip may hold.
+
+    Attributes
+    ----------
+    tests : dict
+        Exercise name -> its test file (``tests/exercises/test_NN_topic.py`` of `root`).
+
+    Raises
+    ------
+    ValueError
+        On a bad value, naming the option: no exercise tests under `root`, an unknown exercise,
+        ``jobs < 1``, a limit that is not a finite number > 0, `resume` or `students` without `out`,
+        `students` with `resume`, an unknown visibility.
+    """
+
+    paths: tuple
+    out: Path = None
+    jobs: int = 1
+    exercise: str = None
+    public_only: bool = False
+    seed: int = None
+    time_limit: float = None
+    memory_mb: float = None
+    root: Path = None
+    private: tuple = ()
+    hidden_visibility: str = "after_published"
+    python: str = None
+    gradescope: Path = None
+    isolation: object = "auto"
+    resume: bool = False
+    audit_hook: bool = True
+    rubric: tuple = ()
+    course: Path = None
+    times: Path = None
+    metadata: Path = None
+    students: tuple = None
+    limits: object = None
+    tests: dict = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        fix = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen: set once, here)
+        root = Path(self.root).resolve() if self.root else project_root()
+        fix("root", root)
+        fix("tests", exercise_tests(root))
+        if not self.tests:
+            raise ValueError(f"no exercise tests in {root / 'tests' / 'exercises'}")
+        if self.exercise is not None and self.exercise not in self.tests:
+            raise ValueError(f"unknown exercise {self.exercise!r}; expected one of "
+                             f"{', '.join(map(repr, self.tests))}")
+        if isinstance(self.jobs, bool) or not isinstance(self.jobs, int) or self.jobs < 1:
+            raise ValueError(f"jobs must be a positive integer, got {self.jobs!r}")
+        if self.resume and self.out is None:
+            raise ValueError("resume needs out: the folder whose records/ an earlier run wrote")
+        if self.students is not None:
+            fix("students", tuple(dict.fromkeys(self.students)))
+            if self.out is None or self.resume:
+                raise ValueError("student needs out (the folder whose records/ an earlier run wrote) and no resume")
+        if self.hidden_visibility not in VISIBILITIES:
+            raise ValueError(f"hidden_visibility must be one of {', '.join(VISIBILITIES)}, "
+                             f"got {self.hidden_visibility!r}")
+        for name in ("time_limit", "memory_mb"):
+            value = getattr(self, name)
+            fix(name, None if value is None else check_limit(name, value))
+        fix("paths", _paths(self.paths))
+        fix("private", _paths(self.private))
+        fix("rubric", _paths(self.rubric))
+        for name in ("out", "gradescope", "course", "times", "metadata"):
+            fix(name, _optional_path(getattr(self, name)))
+
+    @property
+    def recorded(self):
+        """The options a record keeps: a record made with others is graded again by ``--resume``."""
+        return {"public_only": bool(self.public_only), "seed": self.seed, "time_limit": self.time_limit,
+                "memory_mb": self.memory_mb, "audit_hook": bool(self.audit_hook)}
+
+    @property
+    def memory_mib(self):
+        """`memory_mb` as the whole MiB the sessions are given (None: their default)."""
+        return None if self.memory_mb is None else math.ceil(self.memory_mb)
+
+    @property
+    def logs(self):
+        """The folder of the sessions' logs (None without `out`)."""
+        return None if self.out is None else self.out / "logs"

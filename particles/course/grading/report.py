@@ -1,0 +1,110 @@
+"""The report stage of a grading run: the gradebook, each student's feedback, Gradescope's file, the summary.
+
+Students' outputs are written as their records arrive (:func:`progress_report`), and once more at the end
+of the run from every record (:func:`write_reports`), when written grades and late decisions are brought
+up to date in the record too. The formats themselves are :mod:`particles.course.results.reports`'.
+"""
+
+from pathlib import Path
+
+from ..results.records import SubmissionRecord, TestRecord
+from ..results.reports import gradescope_results, write_json, write_outputs
+from ..walls import isolation as isolation_module
+from .session import catalog
+
+__all__ = ["progress_report", "summarize", "write_reports", "write_gradescope", "LIBRARY_CHANGED"]
+
+LIBRARY_CHANGED = "LIBRARY-CHANGED.txt"
+"""The file in the output folder of a run during which the installed library changed."""
+
+
+def progress_report(options, written):
+    """``report(done, students)``: the outputs of `students` written from the records `done` so far.
+
+    Returns None when the run has no output folder (nothing is written).
+    """
+    if options.out is None:
+        return None
+
+    def report(done, students):
+        write_outputs(options.out, done, options.tests, options.hidden_visibility, students=students,
+                      written=written)
+
+    return report
+
+
+def summarize(tests, units, done, problems, plan, kept, others):
+    """What :func:`~particles.course.grading.driver.grade` returns.
+
+    Parameters
+    ----------
+    tests : dict
+        The course's exercises, in order (:attr:`~particles.course.grading.options.GradeOptions.tests`).
+    units : list of Unit
+        The run's notebooks (rejected ones too).
+    done : dict
+        ``(student, exercise) -> SubmissionRecord``, one for each unit (and the others' records kept).
+    problems : list of str
+    plan : particles.course.walls.isolation.Plan
+        The walls planned (said when no notebook was run).
+    kept : int
+        Records kept from an earlier run (``--resume``).
+    others : dict
+        Records of other students kept as they were (``--student``).
+    """
+    results = [done[(u.student, u.exercise)] for u in units]
+    graded = {}
+    for result in results:
+        graded.setdefault(result.student, []).append(result)
+    exercises = [name for name in tests if any(u.exercise == name for u in units)]
+    layers = [r.isolation for r in results if r.isolation]
+    walls = (isolation_module.describe(layers[0] if layers else {}) if results
+             else f"planned: {plan.to_option()}")
+    return {"students": graded, "exercises": exercises, "problems": problems, "isolation": walls,
+            "resumed": kept, "kept": len(others), "rejected": [u.where for u in units if u.rejected]}
+
+
+def write_reports(options, done, recorder, written, changed):
+    """The outputs of every student and the gradebook, from every record; the records brought up to date.
+
+    Parameters
+    ----------
+    options : GradeOptions
+    done : dict
+        ``(student, exercise) -> SubmissionRecord``.
+    recorder : particles.course.grading.record.Recorder
+    written : particles.course.results.rubric.WrittenGrades
+    changed : list of str
+        Files of the library that changed during the run: said in ``LIBRARY-CHANGED.txt``.
+    """
+    if options.out is None:
+        return
+    write_outputs(options.out, done, options.tests, options.hidden_visibility, written=written)
+    for record in done.values():  # the record holds what the feedback says: written grades, late work
+        recorder.update(record)
+    if changed:
+        (options.out / LIBRARY_CHANGED).write_text(
+            "The installed particles library changed while these submissions were graded:\n"
+            + "".join(f"  {name}\n" for name in changed) + "Do not trust these grades.\n")
+
+
+def write_gradescope(options, results, problems, walls, written, changed):
+    """Gradescope's ``results.json`` of one submission (``options.gradescope``) from its records.
+
+    A submission without a gradable notebook of the exercise fails every test, saying why; a run during
+    which the grader's own files changed scores nothing (no score is better than a forged one).
+    """
+    if not results and options.exercise is not None:
+        why = "no notebook for this exercise was found in your submission" if not problems else problems[0]
+        tests = catalog(options.root, options.exercise, options.public_only, options.python)
+        results = [SubmissionRecord(student="submission", exercise=options.exercise, sandbox=walls,
+                                    tests=[TestRecord.from_dict(t).failed(why) for t in tests])]
+    written.apply(results)
+    data = gradescope_results("submission", results, options.hidden_visibility, manual=written.manual())
+    if problems:
+        data["output"] = "\n".join([data["output"], *problems]).strip()
+    if changed:
+        data = {"score": 0, "output": "The autograder's own files changed while grading this submission; "
+                "it was not graded. Please tell the instructors.", "tests": [], "visibility": "visible"}
+    Path(options.gradescope).parent.mkdir(parents=True, exist_ok=True)
+    write_json(options.gradescope, data)
