@@ -10,16 +10,20 @@ def _warn(done, export, moodle_id):
               "SIS Login ID: Canvas can match it only by name", file=sys.stderr)
     for name, record in export.unmatched:
         print(f"not on the roster: {record.student} ({record.exercise}, {record.total:g}/{record.total_max:g} "
-              f"points, records/{name}): not exported", file=sys.stderr)
+              f"points, {name}): not exported", file=sys.stderr)
+    for student, exercise, run in export.pending:
+        print(f"not graded yet: {student}'s {exercise} (grading run {run} was interrupted): these grades are "
+              "partial; run particles grade --resume, then export again", file=sys.stderr)
     for fmt, students in done["left_out"].items():
         for student in students:
             print(f"left out of the {fmt} file: {student.submission_name} (roster line {student.line}) has no "
                   f"{moodle_id}", file=sys.stderr)
-    return bool(export.unmatched or any(done["left_out"].values()))
+    return bool(export.unmatched or export.pending or any(done["left_out"].values()))
 
 
 def run(args):
-    from ..course.results.lms import ExportError, RosterError, export_grades
+    from ..course.results.lms import ExportError, export_grades
+    from ..course.term.roster import RosterError
 
     try:
         done = export_grades(args.out, args.roster, canvas=args.canvas, moodle=args.moodle,
@@ -42,15 +46,16 @@ def run(args):
 def register(commands):
     export = commands.add_parser(
         "export", help="write the grades of a graded folder for Canvas and Moodle",
-        description="Read OUT/records (written by `particles grade --out OUT`) and write Canvas's and Moodle's "
-        "gradebook import CSVs: one row per student of the roster, one column per exercise (tests + written "
-        "answers - late penalty) and a total. A roster student without a record gets 0 (\"missing\"); every "
-        "problem is listed in OUT/lms-report.csv. Exit status 0; 1 when a record's student is not on the roster "
-        "or a student was left out of a file; 2 on a bad roster or unreadable records.")
+        description="Read the course record of OUT (written by `particles grade --out OUT`) and write Canvas's "
+        "and Moodle's gradebook import CSVs: one row per student of the roster, one column per exercise (tests + "
+        "written answers - late penalty) and a total. A roster student without a record gets 0 (\"missing\"); "
+        "every problem is listed in OUT/lms-report.csv. Exit status 0; 1 when a record's student is not on the "
+        "roster, a student was left out of a file or a notebook is not graded yet (an interrupted run); 2 on a bad "
+        "roster or an unreadable record.")
     export.add_argument("out", metavar="OUT", help="the output folder of a grading run")
     export.add_argument("--roster", required=True, help="CSV: submission_name and the students' LMS identifiers "
-                        "(canvas_id, sis_user_id, sis_login_id, section, email, username, idnumber); Canvas's "
-                        "gradebook export also works, with --name-column")
+                        "(canvas_id, sis_user_id, sis_login_id, section, email, username, idnumber) and aliases; "
+                        "Canvas's gradebook export also works, with --name-column")
     export.add_argument("--canvas", metavar="FILE", help="write Canvas's gradebook import CSV here")
     export.add_argument("--moodle", metavar="FILE", help="write Moodle's grade import CSV here")
     export.add_argument("--name-column", default="submission_name",

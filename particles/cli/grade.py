@@ -15,7 +15,8 @@ def options(args):
         public_only=args.public, seed=args.seed, time_limit=args.time_limit, memory_mb=args.memory_mb,
         root=course_root(args), private=tuple(args.private), hidden_visibility=args.hidden_visibility,
         gradescope=args.gradescope, isolation=args.isolation, resume=args.resume, rubric=tuple(args.rubric),
-        course=args.course, times=args.times, metadata=args.metadata, students=args.student)
+        course=args.course, times=args.times, times_from=args.times_from, roster=args.roster,
+        metadata=args.metadata, students=args.student)
 
 
 def progress(result):
@@ -49,8 +50,8 @@ def report(args, summary):
     if summary["students"]:
         print_table(summary)
     if args.out:
-        print(f"\ngradebook: {Path(args.out) / 'gradebook.csv'}; per student: results.json, feedback.md and "
-              "feedback.html")
+        print(f"\ngradebook of the term: {Path(args.out) / 'gradebook.csv'}; per student: results.json, feedback.md "
+              f"and feedback.html; the record: {Path(args.out) / 'course.sqlite'}")
     if not summary["students"] and not args.gradescope:
         print("particles grade: no notebooks were graded", file=sys.stderr)
         return 1
@@ -63,11 +64,14 @@ def report(args, summary):
 
 
 def run(args):
-    from ..course.grading.driver import LibraryChanged, run_grading
+    from ..course.grading.driver import GradingInterrupted, LibraryChanged, run_grading
     from ..course.walls.isolation import IsolationUnavailable
 
     try:
         summary = run_grading(options(args), progress=progress)
+    except GradingInterrupted as stopped:  # Ctrl-C: one line, the record consistent
+        print(f"particles grade: {stopped}", file=sys.stderr)
+        return 130
     except (ValueError, IsolationUnavailable) as error:
         print(f"particles grade: {error}", file=sys.stderr)
         return 2
@@ -105,7 +109,13 @@ def register(commands):
     grade.add_argument("--course", metavar="FILE",
                        help="deadlines and late policy (TOML; default: course.toml in the course folder, if any)")
     grade.add_argument("--times", metavar="FILE",
-                       help="submission times, a CSV student,exercise,submitted (default: the notebooks' file times)")
+                       help="submission times, a CSV student,exercise,submitted (Gradescope's export carries its own)")
+    grade.add_argument("--times-from", choices=["mtime"],
+                       help="mtime: accept the notebook files' modification times as submission times where nothing "
+                            "else gives one (by default a deadline without submission times stops the run, exit 2)")
+    grade.add_argument("--roster", metavar="FILE",
+                       help="who is in the course: a CSV of students, their LMS identifiers and aliases (default: "
+                            "the course file's roster); every name the run meets must be a roster student's")
     grade.add_argument("--metadata", metavar="FILE",
                        help="Gradescope's submission_metadata.json: its created_at is the submission time")
     grade.add_argument("--student", action="append", metavar="ID",

@@ -29,7 +29,8 @@ Modules:
 * :mod:`~particles.course.grading.figures`: figures in the feedback: the student's curve beside the
   reference's.
 * :mod:`~particles.course.grading.deadlines`: the course file (``course.toml``): deadlines, the late
-  policy, extensions; submission times; the late penalty of a record;
+  policy, extensions (their names checked); the late penalty of a record;
+* :mod:`~particles.course.grading.times`: when each notebook was submitted, never guessed;
 * :mod:`~particles.course.grading.versions`: which version of the tests graded a record (a digest of
   the exercise's tests and the library).
 """

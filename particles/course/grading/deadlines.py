@@ -3,6 +3,8 @@
 The course file is TOML, ``course.toml`` at the course root or given with
 ``particles grade --course FILE``::
 
+    roster = "roster.csv"    # who is in the course (see particles.course.term.roster); optional
+
     # the late policy of every exercise (each may override it)
     [late]
     penalty_per_day = 0.10   # fraction of the exercise's points taken off per started day late
@@ -28,24 +30,24 @@ from the deadline itself. An exercise the file does not name has no deadline (it
 ``late`` is None). Every key is checked: an unknown exercise or key, a deadline without a time
 zone, a negative penalty, a cap outside [0, 1] are errors naming the key.
 
-The time of a submission is, in this order: Gradescope's ``submission_metadata.json``
-(``created_at``; ``particles grade --metadata FILE``, which the bundle's ``run_autograder``
-passes), a times file (``--times FILE``: a CSV ``student,exercise,submitted`` as LMS exports
-give, ``submitted`` in ISO 8601 with a zone), else the notebook file's modification time. The
-record's ``late`` says which (``source``).
+The time of a submission is never guessed (:mod:`particles.course.grading.times` says where it comes from).
+
+Every name is checked: an ``[extensions.NAME]`` or a times file's ``student`` that is no student of the course
+(:mod:`particles.course.term.identity`: the roster's students and aliases, else the students the course's
+record and the run know) stops the run before anything is graded, naming the file and the key or line. The
+course file may name the roster: ``roster = "roster.csv"`` (relative to the course file).
 """
 
-import csv
-import json
 import math
-import os
 import tomllib
 from dataclasses import dataclass, field
-from datetime import date, datetime, time, timedelta, timezone
+from datetime import date, datetime, time, timedelta
 from pathlib import Path
 
-__all__ = ["LatePolicy", "Course", "load_course", "find_course", "decide", "apply_late", "SubmissionTimes",
-           "LateWork", "read_times", "read_gradescope_metadata", "parse_time", "COURSE_FILE"]
+from .discovery import Unit
+
+__all__ = ["LatePolicy", "Course", "load_course", "find_course", "decide", "apply_late", "LateWork", "parse_time",
+           "resolve_extensions", "shown_time", "COURSE_FILE"]
 
 COURSE_FILE = "course.toml"
 """The course file's name at the course root."""
@@ -136,12 +138,15 @@ class Course:
         student -> {exercise -> aware datetime (a new deadline) or float (extra days)}.
     path : str
         The file read ("" when made in code).
+    roster : Path or None
+        The roster the course file names (``roster = "roster.csv"``, relative to the course file).
     """
 
     deadlines: dict = field(default_factory=dict)
     policies: dict = field(default_factory=dict)
     extensions: dict = field(default_factory=dict)
     path: str = ""
+    roster: Path = None
 
     def deadline_of(self, student, exercise, aliases=()):
         """(deadline, why) of `student` for `exercise`, after extensions; (None, "") when none applies.
@@ -200,9 +205,9 @@ def _table(data, key):
 
 
 def _course(data, exercises, path=""):
-    unknown = sorted(set(data) - {"late", "exercises", "extensions"})
+    unknown = sorted(set(data) - {"late", "exercises", "extensions", "roster"})
     if unknown:
-        raise ValueError(f"unknown key {unknown[0]!r}; expected late, exercises or extensions")
+        raise ValueError(f"unknown key {unknown[0]!r}; expected roster, late, exercises or extensions")
     known = ", ".join(exercises)
 
     def check_exercise(name, key):
@@ -215,6 +220,10 @@ def _course(data, exercises, path=""):
         raise ValueError(f"late.{extra[0]}: unknown key; expected {', '.join(_POLICY_KEYS)}")
     base = LatePolicy.from_table(late, "late")
     course = Course(path=path)
+    if "roster" in data:
+        if not isinstance(data["roster"], str) or not data["roster"].strip():
+            raise ValueError(f"roster: expected the roster file's path (a string), got {data['roster']!r}")
+        course.roster = Path(path).parent / data["roster"] if path else Path(data["roster"])
     for name, table in _table(data, "exercises").items():
         key = f"exercises.{name}"
         check_exercise(name, key)
@@ -260,7 +269,7 @@ def _fmt(x):
     return f"{x:g}"
 
 
-def _when(moment):
+def shown_time(moment):
     """``2026-10-01 23:59 +01:00`` (seconds only when there are some)."""
     text = moment.strftime("%Y-%m-%d %H:%M" + (":%S" if moment.second else ""))
     offset = moment.strftime("%z")
@@ -314,11 +323,11 @@ def decide(submitted, deadline, policy, total_max, why="", source=""):
     """
     submitted, deadline = parse_time(submitted, "submitted"), parse_time(deadline, "deadline")
     shown = submitted.astimezone(deadline.tzinfo)
-    where = f"the deadline {_when(deadline)}" + (f" ({why})" if why else "")
+    where = f"the deadline {shown_time(deadline)}" + (f" ({why})" if why else "")
     late = shown - deadline
     days, fraction = 0, 0.0
     if late <= timedelta(0):
-        reason = f"submitted {_when(shown)}, before {where}: no penalty"
+        reason = f"submitted {shown_time(shown)}, before {where}: no penalty"
     elif late <= timedelta(minutes=policy.grace_minutes):
         reason = (f"submitted {_duration(late)} after {where}, within the grace period of "
                   f"{_fmt(policy.grace_minutes)} minutes: no penalty")
@@ -361,101 +370,25 @@ def apply_late(record, course, submitted, source="", aliases=()):
     return record
 
 
-def read_gradescope_metadata(path):
-    """(created_at, aliases) of Gradescope's ``submission_metadata.json``.
-
-    Gradescope writes the file to ``/autograder/submission_metadata.json``
-    (https://gradescope-autograders.readthedocs.io/en/latest/submission_metadata/): ``created_at``
-    is the submission's time (ISO 8601 with its zone), ``users`` the submitters (``email``, ``id``,
-    ``name``, sometimes ``sid``), whose e-mails and ids an extension may name.
+def resolve_extensions(course, identity, where=""):
+    """The course with its extensions keyed by the grader's names of their students.
 
     Raises
     ------
     ValueError
-        When the file cannot be read, is not JSON, or has no valid ``created_at``.
+        Naming every ``[extensions.NAME]`` that is no student of `identity` (nothing is graded).
     """
-    path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError) as error:
-        raise ValueError(f"cannot read Gradescope's submission metadata {path}: {error}") from None
-    if not isinstance(data, dict) or "created_at" not in data:
-        raise ValueError(f"{path}: Gradescope's submission metadata has no created_at")
-    submitted = parse_time(data["created_at"], f"{path}: created_at")
-    aliases = []
-    for user in data.get("users") or []:
-        if isinstance(user, dict):
-            aliases += [str(user[k]) for k in ("email", "sid", "id") if user.get(k) not in (None, "")]
-    return submitted, aliases
-
-
-def read_times(path):
-    """The times file: a CSV with the columns ``student``, ``exercise``, ``submitted`` (others ignored).
-
-    Returns
-    -------
-    dict
-        (student, exercise) -> aware datetime. An empty ``exercise`` cell stands for every exercise
-        (key ``(student, "")``).
-
-    Raises
-    ------
-    ValueError
-        When the file cannot be read, lacks a column, or a row's time is not ISO 8601 with a zone
-        (naming the row), or a student and exercise are given twice.
-    """
-    path = Path(path)
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as handle:
-            rows = list(csv.DictReader(handle))
-            columns = rows and list(rows[0]) or []
-    except (OSError, UnicodeDecodeError, csv.Error) as error:
-        raise ValueError(f"cannot read the times file {path}: {error}") from None
-    missing = [c for c in ("student", "exercise", "submitted") if c not in columns]
-    if rows and missing:
-        raise ValueError(f"{path}: no column {', '.join(missing)}; expected a header student,exercise,submitted")
-    times = {}
-    for line, row in enumerate(rows, start=2):
-        key = ((row["student"] or "").strip(), (row["exercise"] or "").strip())
-        if not key[0]:
-            raise ValueError(f"{path}, line {line}: no student")
-        if key in times:
-            raise ValueError(f"{path}, line {line}: {key[0]} {key[1] or '(every exercise)'} is given twice")
-        times[key] = parse_time(row["submitted"] or "", f"{path}, line {line}, submitted")
-    return times
-
-
-class SubmissionTimes:
-    """When each notebook was submitted: Gradescope's metadata, else a times file, else the file's time.
-
-    Parameters
-    ----------
-    metadata : path, optional
-        Gradescope's ``submission_metadata.json`` (every notebook graded is of that one submission).
-    times : path, optional
-        A times file (:func:`read_times`).
-    """
-
-    def __init__(self, metadata=None, times=None):
-        self.metadata = read_gradescope_metadata(metadata) if metadata is not None else None
-        self.times = read_times(times) if times is not None else {}
-
-    def aliases(self):
-        """Other names of the submitter (Gradescope's e-mails and ids) an extension may use."""
-        return tuple(self.metadata[1]) if self.metadata else ()
-
-    def of(self, unit):
-        """(submitted, source) of a :class:`~particles.course.grading.discovery.Unit`; (None, "") if unknown."""
-        if self.metadata is not None:
-            return self.metadata[0], "Gradescope's submission metadata"
-        for key in ((unit.student, unit.exercise), (unit.student, "")):
-            if key in self.times:
-                return self.times[key], "the times file"
-        try:
-            mtime = os.stat(unit.notebook).st_mtime
-        except OSError:
-            return None, ""
-        return datetime.fromtimestamp(mtime, tz=timezone.utc), "the notebook file's modification time"
+    if course is None or not course.extensions:
+        return course
+    unknown = [name for name in course.extensions if identity.find(name) is None]
+    if unknown:
+        raise ValueError(f"{course.path or where}: " + "; ".join(f"[extensions.{n}]: {n!r} is no student of "
+                         f"{identity.describe()}" for n in unknown) + "; correct the name (or add it to the roster's "
+                         "aliases); nothing was graded")
+    extensions = {}
+    for name, table in course.extensions.items():
+        extensions.setdefault(identity.find(name).name, {}).update(table)
+    return Course(course.deadlines, course.policies, extensions, course.path, course.roster)
 
 
 class LateWork:
@@ -467,7 +400,9 @@ class LateWork:
         The course file's deadlines (:func:`find_course`).
     times : SubmissionTimes
     units : iterable of Unit
-        The run's notebooks; a record is decided with the time of its own.
+        The run's notebooks; a record is decided with the time of its own. A record of another notebook (one
+        of the term's other current results) is decided with the time the course's record kept for it, and
+        keeps its decision when no time is known.
     """
 
     def __init__(self, course, times, units):
@@ -476,5 +411,8 @@ class LateWork:
 
     def __call__(self, record):
         """Set ``record.late`` (see :func:`apply_late`) and return `record`."""
-        when, source = self.times.of(self.units[(record.student, record.exercise)])
+        unit = self.units.get((record.student, record.exercise))
+        when, source = self.times.of(unit or Unit(record.student, record.exercise, Path(record.notebook or "")))
+        if unit is None and when is None:
+            return record
         return apply_late(record, self.course, when, source, self.times.aliases())

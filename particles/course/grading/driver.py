@@ -36,18 +36,37 @@ import tempfile
 from pathlib import Path
 
 from ..results.rubric import WrittenGrades
+from ..term.identity import Identity
+from ..term.recorder import DatabaseRecorder
+from ..term.roster import read_roster
 from ..walls import isolation as isolation_module
-from .deadlines import LateWork, SubmissionTimes, find_course
+from .deadlines import LateWork, find_course, resolve_extensions
+from .times import SubmissionTimes, check_times
 from .discovery import find_submissions
 from .options import GradeOptions
 from .plan import plan_batches
-from .record import Collector, FolderRecorder, MemoryRecorder
+from .record import Collector, MemoryRecorder
 from .report import progress_report, summarize, write_gradescope, write_reports
 from .run import LocalRunner, SessionSettings, run_all
 from .session import catalog, rejected_record
 from .versions import library_digest, tests_version
 
-__all__ = ["grade", "run_grading", "LibraryChanged"]
+__all__ = ["grade", "run_grading", "LibraryChanged", "GradingInterrupted"]
+
+
+class GradingInterrupted(KeyboardInterrupt):
+    """A run stopped by Ctrl-C (SIGINT): its sessions stopped, every record made so far kept, the run marked
+    interrupted in the course record.
+
+    Attributes
+    ----------
+    graded, planned : int
+        Notebooks with a record of this run, and notebooks it was to grade.
+    """
+
+    def __init__(self, graded, planned):
+        self.graded, self.planned = graded, planned
+        super().__init__(f"interrupted: {graded} of {planned} graded; rerun with --resume")
 
 
 class LibraryChanged(RuntimeError):
@@ -90,11 +109,60 @@ def session_settings(options, plan, intake):
                            memory_mb=options.memory_mb, python=options.python, audit_hook=options.audit_hook)
 
 
-def select_students(options, units, recorder):
-    """``(units, others)``: with ``--student``, those students' units and everyone else's current records."""
-    if options.students is None:
-        return units, {}
-    return recorder.regrade(units, options.students)
+def open_record(options, roster, recorder=None):
+    """The record stage of the run, and who is in the course.
+
+    With an output folder: its course record (:class:`~particles.course.term.recorder.DatabaseRecorder`), locked
+    for this run, whose students are the roster's (else the ones it knows). Without: the run's results in
+    memory, and the roster's students (else whoever the submissions name).
+    """
+    if recorder is not None:
+        return recorder, roster.identity() if roster is not None else Identity()
+    if options.out is None:
+        return MemoryRecorder(), roster.identity() if roster is not None else Identity()
+    recorder = DatabaseRecorder.open(options.out, options.recorded)
+    try:
+        recorder.identity = recorder.term.identity(roster)
+        return recorder, recorder.identity
+    except Exception:
+        recorder.finish(complete=False)
+        raise
+
+
+def check_inputs(options, course, identity, units, recorder):
+    """Every name the instructor wrote is a student's, every deadline has real submission times.
+
+    Returns the course with its extensions under the students' grader names, the submission times, the rubric's
+    written grades and the problems to report; raises ValueError (nothing graded) on an unknown name in the
+    course file's extensions, the times file or a rubric, or a notebook of an exercise with a deadline and no
+    submission time.
+    """
+    if options.metadata is None or identity.closed:  # Gradescope's one submission: its own names only
+        course = resolve_extensions(course, identity)
+    earlier = getattr(getattr(recorder, "term", None), "submission_time", None)
+    times = SubmissionTimes(options.metadata, options.times, identity, list(options.tests),
+                            options.times_from == "mtime", earlier)
+    written = WrittenGrades.load(options.rubric, units, options.root, list(options.tests), identity)
+    return course, times, written, check_times(units, course, times)
+
+
+def select_students(options, units, recorder, identity):
+    """``(units, others)``: the units this run grades (with ``--student``, those students' only) and the current
+    records of every other notebook of the term, kept as they are."""
+    current = recorder.current()
+    if options.students is not None:
+        if not current:
+            raise ValueError(f"student needs the records of an earlier run; {options.out} holds none")
+        found = {u.student for u in units}
+        names = [identity.find(s).name if identity.find(s) else s for s in options.students]
+        unknown = [s for s, name in zip(options.students, names) if name not in found]
+        if unknown:
+            known = sorted(found | {student for student, _ in current})
+            raise ValueError(f"unknown student {unknown[0]!r}: no notebook of theirs in the submissions; "
+                             f"the students are {', '.join(known)}")
+        units = [u for u in units if u.student in names]
+    graded = {(u.student, u.exercise) for u in units}
+    return units, {key: record for key, record in current.items() if key not in graded}
 
 
 def resume(options, units, recorder, collect):
@@ -139,45 +207,69 @@ def run_grading(options, progress=None, runner=None, recorder=None):
     runner : particles.course.grading.run.Runner, optional
         Where the batches are graded (default: this machine, ``options.jobs`` at a time).
     recorder : particles.course.grading.record.Recorder, optional
-        Where the records are kept (default: ``out/records/``, or memory without `out`).
+        Where the records are kept (default: the course record of ``out``, or memory without `out`).
 
     Returns
     -------
     dict
         See :func:`grade`.
     """
-    course = find_course(options.root, list(options.tests), options.course)                   # read
-    times = SubmissionTimes(options.metadata, options.times)
+    course = find_course(options.root, list(options.tests), options.course)                    # read
+    roster_path = options.roster or (course.roster if course is not None else None)
+    roster = read_roster(roster_path) if roster_path is not None else None
     plan, before = decide_walls(options)
-    with tempfile.TemporaryDirectory(prefix="particles-intake-") as intake:
-        limits = {"limits": options.limits} if options.limits is not None else {}
-        units, problems = find_submissions(options.paths, list(options.tests), options.exercise,   # discover
-                                           workdir=intake, **limits)
-        written = WrittenGrades.load(options.rubric, units, options.root,
-                                     [options.exercise] if options.exercise else [])
-        if options.out is not None:
-            options.logs.mkdir(parents=True, exist_ok=True)
-        recorder = recorder or (FolderRecorder(options.out, options.recorded) if options.out else MemoryRecorder())
-        units, others = select_students(options, units, recorder)
-        collect = Collector(recorder, LateWork(course, times, units), progress_report(options, written),
-                            progress, done=others)
-        todo = resume(options, units, recorder, collect)
-        settings = session_settings(options, plan, intake)
-        recorder.start(len(todo))
-        collect_rejected(units, settings, collect, problems)
-        batches = plan_batches(todo, options.jobs, options.seed)                                   # plan
-        run_all(batches, runner or LocalRunner(options.jobs), settings, collect)                  # run, record
-        kept = sum(1 for u in units if not u.rejected) - len(todo)
-        summary = summarize(options.tests, units, collect.done, problems, plan, kept, others)
-        changed = isolation_module.library_changes(before)
-        write_reports(options, collect.done, recorder, written, changed)                           # report
-        if options.gradescope is not None:
-            results = [collect.done[(u.student, u.exercise)] for u in units]
-            write_gradescope(options, results, problems, summary["isolation"], written, changed)
-        recorder.finish()
+    recorder, identity = open_record(options, roster, recorder)
+    complete, state = False, {}
+    try:
+        with tempfile.TemporaryDirectory(prefix="particles-intake-") as intake:
+            summary, changed = _stages(options, course, identity, plan, before, recorder, runner, progress, intake,
+                                       state)
+        complete = True
+    except KeyboardInterrupt:
+        collect = state.get("collect")
+        graded = collect.collected if collect is not None else 0
+        raise GradingInterrupted(graded, graded + (len(collect.todo) if collect is not None else 0)) from None
+    finally:
+        recorder.finish(complete)
     if changed:
         raise LibraryChanged(changed, summary)
     return summary
+
+
+def _stages(options, course, identity, plan, before, recorder, runner, progress, intake, state):
+    """The stages from discovery to the reports (see :func:`run_grading`); returns (summary, changed files).
+
+    `state` receives the run's collector (``"collect"``), for what an interrupted run says."""
+    limits = {"limits": options.limits} if options.limits is not None else {}
+    units, problems = find_submissions(options.paths, list(options.tests), options.exercise,      # discover
+                                       workdir=intake, identity=identity, **limits)
+    course, times, written, late_flags = check_inputs(options, course, identity, units, recorder)
+    problems += late_flags
+    units, others = select_students(options, units, recorder, identity)
+    if options.out is not None:
+        options.logs.mkdir(parents=True, exist_ok=True)
+    recorder.start(units, times.of)
+    written = recorder.keep_written(written)
+    collect = Collector(recorder, LateWork(course, times, units), progress_report(options, written),
+                        progress, done=others)
+    collect.todo = {(u.student, u.exercise) for u in units if not u.rejected}
+    state["collect"] = collect
+    todo = resume(options, units, recorder, collect)
+    settings = session_settings(options, plan, intake)
+    collect_rejected(units, settings, collect, problems)
+    batches = plan_batches(todo, options.jobs, options.seed)                                       # plan
+    run_all(batches, runner or LocalRunner(options.jobs), settings, collect)                      # run, record
+    kept = sum(1 for u in units if not u.rejected) - len(todo)
+    summary = summarize(options.tests, units, collect.done, problems, plan, kept, others)
+    changed = isolation_module.library_changes(before)
+    if course is not None:  # a new deadline or extension: every decision made again, from the kept times
+        for record in others.values():
+            collect.late(record)
+    write_reports(options, collect.done, recorder, written, changed)                               # report
+    if options.gradescope is not None:
+        results = [collect.done[(u.student, u.exercise)] for u in units]
+        write_gradescope(options, results, problems, summary["isolation"], written, changed)
+    return summary, changed
 
 
 def grade(paths, out=None, *, progress=None, runner=None, recorder=None, **options):

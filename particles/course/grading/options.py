@@ -5,7 +5,6 @@ builds one from its keyword arguments. Every check of a value the instructor gav
 object is made, so that a run with a bad option stops before anything is read or graded.
 """
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -73,6 +72,11 @@ class GradeOptions:
         The course file of deadlines and late policies (default: ``course.toml`` at `root`).
     times : path, optional
         A CSV ``student,exercise,submitted`` of submission times.
+    times_from : {None, "mtime"}
+        ``"mtime"`` accepts the notebook files' modification times as submission times when nothing else
+        gives one (by default a deadline without a real submission time stops the run).
+    roster : path, optional
+        The roster (default: the course file's ``roster``, if any): who is in the course.
     metadata : path, optional
         Gradescope's ``submission_metadata.json``: its ``created_at`` is the time of every notebook.
     students : sequence of str, optional
@@ -90,7 +94,7 @@ class GradeOptions:
     ValueError
         On a bad value, naming the option: no exercise tests under `root`, an unknown exercise,
         ``jobs < 1``, a limit that is not a finite number > 0, `resume` or `students` without `out`,
-        `students` with `resume`, an unknown visibility.
+        `students` with `resume`, an unknown visibility, a `times_from` other than ``"mtime"``.
     """
 
     paths: tuple
@@ -112,6 +116,8 @@ class GradeOptions:
     rubric: tuple = ()
     course: Path = None
     times: Path = None
+    times_from: str = None
+    roster: Path = None
     metadata: Path = None
     students: tuple = None
     limits: object = None
@@ -144,7 +150,9 @@ class GradeOptions:
         fix("paths", _paths(self.paths))
         fix("private", _paths(self.private))
         fix("rubric", _paths(self.rubric))
-        for name in ("out", "gradescope", "course", "times", "metadata"):
+        if self.times_from not in (None, "mtime"):
+            raise ValueError(f"times_from must be None or 'mtime', got {self.times_from!r}")
+        for name in ("out", "gradescope", "course", "times", "metadata", "roster"):
             fix(name, _optional_path(getattr(self, name)))
 
     @property
@@ -152,11 +160,6 @@ class GradeOptions:
         """The options a record keeps: a record made with others is graded again by ``--resume``."""
         return {"public_only": bool(self.public_only), "seed": self.seed, "time_limit": self.time_limit,
                 "memory_mb": self.memory_mb, "audit_hook": bool(self.audit_hook)}
-
-    @property
-    def memory_mib(self):
-        """`memory_mb` as the whole MiB the sessions are given (None: their default)."""
-        return None if self.memory_mb is None else math.ceil(self.memory_mb)
 
     @property
     def logs(self):

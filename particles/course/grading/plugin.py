@@ -78,6 +78,7 @@ from ..reading.submission import SubmissionCode, notebook_cells
 from ..reading.provided import provided_cells
 from .figures import Feedback
 from ..walls.isolation import Plan, protect_this_process
+from ..walls.syscalls import die_with_parent
 from ..results.signing import TOKEN_FD, sign_records
 from ..paths import project_root
 from .blame import blame, function_of, stub_functions
@@ -143,6 +144,8 @@ def pytest_configure(config):
     config._particles_jobs = jobs
     config._particles_token = _read_token()
     protect_this_process()  # no process of the same uid may read this session's memory or environment
+    if os.environ.get("PARTICLES_GRADER_PID", "").isdigit():  # a session never outlives its driver
+        die_with_parent(int(os.environ["PARTICLES_GRADER_PID"]))
     config._particles_plan = None
     config._particles_seed = seed
     config._particles_results = {job["id"]: SessionRecord(id=job["id"], seed=job["seed"]) for job in jobs}

@@ -1,24 +1,19 @@
 """The record stage of a grading run: each result decided, saved and reported as it arrives.
 
-Where the results are kept is one small protocol, :class:`Recorder`: the record a resumed run may keep,
-save a result, bring a saved result up to date, every current result, and mark a run started and
-finished (a run that never says it finished is incomplete). :class:`FolderRecorder` keeps them as the
-JSON files of ``OUT/records/`` (:mod:`particles.course.results.store`); :class:`MemoryRecorder` keeps
-them in memory, for a run without an output folder. A database is a third implementation.
+Where the results are kept is one small protocol, :class:`Recorder`: the record a resumed run may keep, save
+a result, bring a saved result up to date, every current result, the notebooks still to grade, and a run's
+start (the notebooks it is to grade) and end (finished or not). The course record of an output folder
+(:class:`particles.course.term.recorder.DatabaseRecorder`, a SQLite database) is the one a run with ``--out``
+uses; :class:`MemoryRecorder` keeps one run's results in memory (a run without an output folder, the
+Gradescope bundle's one submission).
 
 :class:`Collector` is what the run stage hands each batch's results to: it makes each record's late
 decision, saves it, writes the students' outputs so far, and tells the caller's progress callback.
 """
 
-from pathlib import Path
 from typing import Protocol
 
-from ..results.store import RecordStore, regrade_split
-
-__all__ = ["Recorder", "FolderRecorder", "MemoryRecorder", "Collector", "INCOMPLETE"]
-
-INCOMPLETE = "RUN-INCOMPLETE.txt"
-"""The file in the output folder of a run that has not finished (removed when it does)."""
+__all__ = ["Recorder", "MemoryRecorder", "Collector"]
 
 
 class Recorder(Protocol):
@@ -36,59 +31,26 @@ class Recorder(Protocol):
     def current(self):
         """Every current record: ``(student, exercise) -> SubmissionRecord``."""
 
-    def regrade(self, units, students):
-        """``(units, others)``: the units of `students`, and the current records of everyone else."""
+    def start(self, units, times):
+        """A run that is to grade `units` starts (``times(unit) -> (submitted, source)``): it is incomplete until
+        :meth:`finish`."""
 
-    def start(self, count):
-        """A run that will grade `count` notebooks starts: it is incomplete until :meth:`finish`."""
+    def finish(self, complete=True):
+        """The run ended: `complete` when every notebook it was to grade has its record."""
 
-    def finish(self):
-        """The run finished: every notebook it was to grade has its record."""
+    def pending(self):
+        """``(student, exercise, run)`` of notebooks a run meant to grade and no run graded since."""
 
-
-class FolderRecorder:
-    """The records as JSON files in ``OUT/records/``, one per student and exercise.
-
-    Parameters
-    ----------
-    out : path
-        The run's output folder.
-    options : dict
-        The options a record keeps (:attr:`~particles.course.grading.options.GradeOptions.recorded`).
-    """
-
-    def __init__(self, out, options):
-        self.out = Path(out)
-        self.store = RecordStore(self.out / "records", options)
-
-    def kept(self, unit, version):
-        return self.store.load(unit, version)
-
-    def save(self, record):
-        self.store.save(record)
-
-    def update(self, record):
-        self.store.update(record)
-
-    def current(self):
-        return self.store.load_all()
-
-    def regrade(self, units, students):
-        return regrade_split(self.store.folder, units, students)
-
-    def start(self, count):
-        (self.out / INCOMPLETE).write_text(f"This grading run, of {count} notebook(s), has not finished: its "
-                                           "gradebook is partial. Run the same command with --resume.\n")
-
-    def finish(self):
-        (self.out / INCOMPLETE).unlink(missing_ok=True)
+    def keep_written(self, written):
+        """Keep the written grades of this run's rubrics (a :class:`~particles.course.results.rubric.WrittenGrades`);
+        returns every written grade the record holds, theirs included."""
 
 
 class MemoryRecorder:
-    """The records of one run in memory (a run without an output folder keeps nothing on disk)."""
+    """The records of one run in memory: nothing is kept for a later run."""
 
     def __init__(self):
-        self.records, self.complete = {}, None
+        self.records, self.complete, self.run, self.planned = {}, None, None, []
 
     def kept(self, unit, version):
         return None
@@ -102,14 +64,17 @@ class MemoryRecorder:
     def current(self):
         return dict(self.records)
 
-    def regrade(self, units, students):
-        raise ValueError("student needs the records of an earlier run, which a run without out does not keep")
+    def start(self, units, times):
+        self.complete, self.planned = False, [(u.student, u.exercise) for u in units if not u.rejected]
 
-    def start(self, count):
-        self.complete = False
+    def finish(self, complete=True):
+        self.complete = complete
 
-    def finish(self):
-        self.complete = True
+    def pending(self):
+        return [] if self.complete else [(s, e, None) for s, e in self.planned if (s, e) not in self.records]
+
+    def keep_written(self, written):
+        return written
 
 
 class Collector:
@@ -121,8 +86,8 @@ class Collector:
     late : callable
         Sets a record's late decision (:class:`~particles.course.grading.deadlines.LateWork`).
     report : callable, optional
-        ``report(done, students)`` writes the outputs of `students` from `done` (a stopped run keeps
-        usable outputs); None writes nothing.
+        ``report(done, students, pending)`` writes the outputs of `students` from `done` (a stopped run keeps
+        usable outputs, its gradebook saying what is still to grade); None writes nothing.
     progress : callable, optional
         Called with each record as it is collected.
     done : dict, optional
@@ -132,20 +97,26 @@ class Collector:
     ----------
     done : dict
         ``(student, exercise) -> SubmissionRecord``: every record decided so far.
+    todo : set
+        ``(student, exercise)`` of the notebooks this run is to grade and has not yet.
+    collected : int
+        Records collected so far (kept ones too).
     """
 
     def __init__(self, recorder, late, report=None, progress=None, done=None):
         self.recorder, self.late, self.report, self.progress = recorder, late, report, progress
-        self.done = dict(done or {})
+        self.done, self.todo, self.collected = dict(done or {}), set(), 0
 
     def __call__(self, records):
         """Decide, save and report `records` (a batch's)."""
+        self.collected += len(records)
         for record in records:
             self.late(record)
             self.done[(record.student, record.exercise)] = record
+            self.todo.discard((record.student, record.exercise))
             self.recorder.save(record)
         if self.report is not None:
-            self.report(self.done, [record.student for record in records])
+            self.report(self.done, [record.student for record in records], sorted(self.todo))
         if self.progress is not None:
             for record in records:
                 self.progress(record)
@@ -154,6 +125,8 @@ class Collector:
         """Keep a record of an earlier run (``--resume``); a new late decision (a new deadline or extension)
         is saved, the grade is not touched."""
         decided = record.late
+        self.collected += 1
         self.done[(record.student, record.exercise)] = self.late(record)
+        self.todo.discard((record.student, record.exercise))
         if record.late != decided:
-            self.recorder.save(record)
+            self.recorder.update(record)

@@ -12,23 +12,47 @@ from ..results.reports import gradescope_results, write_json, write_outputs
 from ..walls import isolation as isolation_module
 from .session import catalog
 
-__all__ = ["progress_report", "summarize", "write_reports", "write_gradescope", "LIBRARY_CHANGED"]
+__all__ = ["progress_report", "statuses", "summarize", "write_reports", "write_gradescope", "LIBRARY_CHANGED"]
 
 LIBRARY_CHANGED = "LIBRARY-CHANGED.txt"
 """The file in the output folder of a run during which the installed library changed."""
 
 
+def statuses(done, pending, run=None):
+    """student -> what their gradebook row is still waiting for ("" when nothing).
+
+    Parameters
+    ----------
+    done : dict
+        ``(student, exercise) -> SubmissionRecord``: an incomplete record (a notebook no machine could grade) is
+        "not graded yet".
+    pending : iterable of (student, exercise, run)
+        Notebooks a run meant to grade and no run has graded since (run None: this run, still going).
+    """
+    waiting = {}
+    for student, exercise, started in pending:
+        why = "this run has not finished" if started in (None, run) else f"run {started} was interrupted"
+        waiting.setdefault(student, []).append(f"{exercise} not graded yet ({why}; rerun with --resume)")
+    for (student, exercise), record in done.items():
+        lost = [note for note in record.notes if note.startswith("Not graded yet")]
+        if not record.complete and lost:
+            waiting.setdefault(student, []).append(f"{exercise} incomplete ({lost[0]}; rerun with --resume)")
+    return {student: "; ".join(items) for student, items in waiting.items()}
+
+
 def progress_report(options, written):
-    """``report(done, students)``: the outputs of `students` written from the records `done` so far.
+    """``report(done, students, todo)``: the outputs of `students` written from the records `done` so far, the
+    gradebook saying which notebooks (`todo`) this run has still to grade.
 
     Returns None when the run has no output folder (nothing is written).
     """
     if options.out is None:
         return None
 
-    def report(done, students):
+    def report(done, students, todo):
+        status = statuses(done, [(s, e, None) for s, e in todo])
         write_outputs(options.out, done, options.tests, options.hidden_visibility, students=students,
-                      written=written)
+                      written=written, status=status)
 
     return report
 
@@ -79,7 +103,8 @@ def write_reports(options, done, recorder, written, changed):
     """
     if options.out is None:
         return
-    write_outputs(options.out, done, options.tests, options.hidden_visibility, written=written)
+    status = statuses(done, recorder.pending(), getattr(recorder, "run", None))
+    write_outputs(options.out, done, options.tests, options.hidden_visibility, written=written, status=status)
     for record in done.values():  # the record holds what the feedback says: written grades, late work
         recorder.update(record)
     if changed:

@@ -135,6 +135,7 @@ class LocalRunner:
 
     def __post_init__(self):
         self.pool = ThreadPoolExecutor(max_workers=self.jobs)
+        session.STOPPING.clear()
 
     def submit(self, batch, settings):
         self.pending[self.pool.submit(run_batch, batch, settings)] = batch
@@ -146,6 +147,9 @@ class LocalRunner:
                 yield Outcome(self.pending.pop(future), results=future.result())
 
     def close(self, cancel=False):
+        if cancel:  # the sessions running now are stopped, not waited for
+            self.pool.shutdown(wait=False, cancel_futures=True)
+            session.stop_sessions()
         self.pool.shutdown(wait=True, cancel_futures=cancel)
 
 

@@ -19,10 +19,12 @@ import json
 import math
 import os
 import secrets
+import signal
 import stat
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -36,7 +38,10 @@ from ..worker.process import library_parent
 from .discovery import notebook_digest, written_answers
 from .versions import tests_version
 
-__all__ = ["catalog", "grade_batch", "grade_unit", "rejected_record"]
+__all__ = ["catalog", "grade_batch", "grade_unit", "rejected_record", "stop_sessions", "STOPPING", "GRADER_PID"]
+
+GRADER_PID = "PARTICLES_GRADER_PID"
+"""The environment variable that gives a grading session its driver's pid."""
 
 
 def _private_folder(name):
@@ -69,14 +74,62 @@ def _environment(root):
     # (pytest-randomly reorders the tests and reseeds the generators), and loading them (pytest-xdist,
     # platformdirs' own) took a tenth of a session's start
     env["PYTEST_DISABLE_PLUGIN_AUTOLOAD"] = "1"
+    env[GRADER_PID] = str(os.getpid())  # the session dies with this process (the plugin asks the kernel)
     env.pop("PYTHONDONTWRITEBYTECODE", None)
     return env
+
+
+_RUNNING = set()  # the sessions running now (Popen objects), so that a stopped run can stop them at once
+_RUNNING_LOCK = threading.Lock()
+STOPPING = threading.Event()
+"""Set while a stopped run ends: no new session starts (cleared when a run starts: :class:`~particles.course.grading.run.LocalRunner`)."""
+
+
+def _run_session(command, cwd, env, timeout, key_fd):
+    """Run one session; (exit status or None after `timeout`, its output). The session has a process group of its
+    own (a Ctrl-C at the terminal reaches the driver only, which stops it: :func:`stop_sessions`) and dies with
+    the driver (the plugin asks the kernel for it)."""
+    with _RUNNING_LOCK:
+        if STOPPING.is_set():
+            return None, "grading stopped: the run was interrupted"
+        process = subprocess.Popen(command, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                   text=True, pass_fds=(key_fd,), start_new_session=True)
+        _RUNNING.add(process)
+    try:
+        output, _ = process.communicate(timeout=timeout)
+        return process.returncode, output
+    except subprocess.TimeoutExpired:
+        _kill_group(process)
+        output, _ = process.communicate()
+        return None, f"grading stopped after {timeout} s\n{output or ''}"
+    finally:
+        with _RUNNING_LOCK:
+            _RUNNING.discard(process)
+
+
+def _kill_group(process):
+    try:
+        os.killpg(process.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+
+
+def stop_sessions():
+    """SIGKILL every grading session this process runs (a run that was interrupted); returns how many."""
+    with _RUNNING_LOCK:
+        STOPPING.set()
+        running = list(_RUNNING)
+    for process in running:
+        _kill_group(process)
+    return len(running)
 
 
 def catalog(root, exercise, public_only=False, python=None):
     """The tests of an exercise (records with ``passed=False``), from ``pytest --collect-only``."""
     root = Path(root)
     test_file = exercise_tests(root)[exercise]
+    if STOPPING.is_set():
+        raise RuntimeError(f"the run was interrupted before the tests of {exercise} were listed")
     with tempfile.TemporaryDirectory(prefix="particles-catalog-") as tmp:
         out = Path(tmp) / "catalog.json"
         extra = ["--collect-only", "--grading-catalog", str(out)] + (["--public-only"] if public_only else [])
@@ -207,11 +260,8 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
             os.write(key_out, token)
             os.close(key_out)
             env = dict(_environment(root), **{TOKEN_FD: str(key_in)})
-            done = subprocess.run(_pytest_command(python or sys.executable, root, test_file, extra), cwd=tmp,
-                                  env=env, capture_output=True, text=True, timeout=timeout, pass_fds=(key_in,))
-            status, output = done.returncode, done.stdout + done.stderr
-        except subprocess.TimeoutExpired as expired:
-            output = f"grading stopped after {timeout} s\n{expired.stdout or ''}"
+            status, output = _run_session(_pytest_command(python or sys.executable, root, test_file, extra), tmp,
+                                          env, timeout, key_in)
         finally:
             os.close(key_in)
         # the records count only if the tests ran to the end (exit status 0: all passed, 1: some failed)

@@ -313,6 +313,9 @@ class SubmissionRecord(_HoldsTests):
         :func:`particles.course.grading.deadlines.decide`.
     tests_version : str
         Digest of the exercise's tests that graded this record (a changed test regrades what it affects).
+    run : dict or None
+        The grading run that made this record, as the course record keeps it: ``id`` and ``started``
+        (:mod:`particles.course.term.database`); None for a record no course record holds.
 
     Notes
     -----
@@ -340,6 +343,7 @@ class SubmissionRecord(_HoldsTests):
     written: list = field(default_factory=list)
     late: dict | None = None
     tests_version: str = ""
+    run: dict | None = None
 
     @property
     def score(self):
@@ -397,7 +401,8 @@ class SubmissionRecord(_HoldsTests):
             if self.late.get("source"):
                 lines[-1] += f" Submission time from {self.late['source']}."
         if self.tests_version:
-            lines.append(f"Graded by tests version {self.tests_version}.")
+            ran = f" in grading run {self.run['id']} of {self.run['started']}" if self.run else ""
+            lines.append(f"Graded by tests version {self.tests_version}{ran}.")
         return lines
 
     def summary_lines(self):

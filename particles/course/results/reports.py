@@ -281,8 +281,8 @@ def feedback_html(student, results):
     return "\n".join(line for line in out if line) + "\n"
 
 
-def write_gradebook(path, rows, exercises):
-    """Write the gradebook CSV: one row per student, one column per exercise, total, max_total.
+def write_gradebook(path, rows, exercises, status=None):
+    """Write the gradebook CSV: one row per student, one column per exercise, total, max_total, status.
 
     An exercise's cell is the record's :attr:`~particles.course.results.records.SubmissionRecord.total`
     (tests, written answers graded by people, minus the late penalty).
@@ -293,20 +293,26 @@ def write_gradebook(path, rows, exercises):
         student -> list of :class:`~particles.course.results.records.SubmissionRecord`, one per exercise.
     exercises : list of str
         Column order. An exercise a student did not submit is left empty.
+    status : dict, optional
+        student -> what their row still waits for (a notebook not graded yet, a run interrupted): a row is
+        never silently partial. A student with a status and no record gets a row of empty cells.
     """
+    status = status or {}
     rows = {student: _records(results) for student, results in rows.items()}
+    rows.update({student: [] for student in status if student not in rows})
     maxima = {}
     for results in rows.values():
         for r in results:
             maxima[r.exercise] = max(maxima.get(r.exercise, 0), r.total_max)
     with open(path, "w", newline="") as handle:
         writer = csv.writer(handle)
-        writer.writerow(["student", *exercises, "total", "max_total"])
+        writer.writerow(["student", *exercises, "total", "max_total", "status"])
         for student in sorted(rows):
             by_exercise = {r.exercise: r.total for r in rows[student]}
             total = sum(by_exercise.values())
             writer.writerow([student, *[_fmt(by_exercise[e]) if e in by_exercise else "" for e in exercises],
-                             _fmt(total), _fmt(sum(maxima.get(e, 0) for e in exercises))])
+                             _fmt(total), _fmt(sum(maxima.get(e, 0) for e in exercises)),
+                             status.get(student, "complete")])
 
 
 def write_json(path, data):
@@ -319,12 +325,13 @@ def write_json(path, data):
 _written = {}  # (folder, hidden_visibility) -> digest of the results its files were last written from
 
 
-def write_outputs(out, done, tests, hidden_visibility, students=None, written=None):
+def write_outputs(out, done, tests, hidden_visibility, students=None, written=None, status=None):
     """A grading run's folder `out`: results.json, feedback.md and feedback.html of `students` (default: all),
     and the gradebook, as far as the records of `done` (``(student, exercise) -> SubmissionRecord``) go.
 
     `written` (a :class:`~particles.course.results.rubric.WrittenGrades`) is merged first into every
-    record, so that a changed rubric rewrites exactly the students whose grades it changes.
+    record, so that a changed rubric rewrites exactly the students whose grades it changes; `status` (student ->
+    text) goes into the gradebook's ``status`` column.
 
     A student's files are rewritten only when their results changed since this
     process last wrote them (the final call of a run then draws no figure again).
@@ -356,4 +363,4 @@ def write_outputs(out, done, tests, hidden_visibility, students=None, written=No
         (folder / "feedback.html").write_text(feedback_html(student, results), encoding="utf-8")
         _written[key] = digest
     exercises = [name for name in tests if any(r.exercise == name for rs in by_student.values() for r in rs)]
-    write_gradebook(out / "gradebook.csv", by_student, exercises)
+    write_gradebook(out / "gradebook.csv", by_student, exercises, status)

@@ -187,9 +187,13 @@ def test_an_lms_export_zip_names_its_students(tmp_path):
     assert sorted(units) == ["43", "Ann_Lee_555", "bo@example.com", "doea", "pat", "smithj", "submission_79"]
     assert units["smithj"].origin == f"{canvas}:smithj_late_101_202_00_warmup.ipynb"
     assert units["smithj"].notebook.is_relative_to(work) and units["smithj"].notebook.is_file()
-    assert units["doea"].origin.endswith(":doea_103_204_00_warmup.ipynb") and not units["doea"].rejected
-    assert problems == [f"{canvas}:doea_103_204_00_warmup-1.ipynb: doea has several notebooks for 00_warmup; "
-                        f"graded {canvas}:doea_103_204_00_warmup.ipynb"]
+    assert units["smithj"].late_flag and units["smithj"].aliases == (("canvas_id", "101"), ("login", "smithj"))
+    # Canvas's re-upload of one file name is "-1": the latest upload is graded, and the report says so
+    assert units["doea"].origin.endswith(":doea_103_204_00_warmup-1.ipynb") and not units["doea"].rejected
+    assert problems == [f"{canvas}:doea_103_204_00_warmup.ipynb: doea has several notebooks for 00_warmup; "
+                        f"graded the latest upload, {canvas}:doea_103_204_00_warmup-1.ipynb"]
+    assert units["bo@example.com"].aliases == (("email", "bo@example.com"), ("sid", "42"))
+    assert units["bo@example.com"].submitted is None  # a date without a time is no submission time
 
 
 def test_a_refused_zip_is_a_problem_and_a_zip_needs_a_workdir(tmp_path):

@@ -15,6 +15,7 @@ import corpus  # noqa: E402
 
 from particles.course.walls import isolation  # noqa: E402
 from particles.course.grading.driver import LibraryChanged, grade  # noqa: E402
+from particles.course.term.database import TermRecord  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -24,18 +25,29 @@ def _write(folder, name, notebook):
     (folder / f"{name}_00_warmup.ipynb").write_text(json.dumps(notebook) if isinstance(notebook, dict) else notebook)
 
 
+def _current(out):
+    """student -> current record (of 00_warmup) in the course record of `out`."""
+    term = TermRecord(out)
+    try:
+        return {student: record for (student, _), record in term.current().items()}
+    finally:
+        term.close()
+
+
 def test_records_are_written_as_they_are_made_and_resumed(tmp_path):
-    """Each notebook's record is on disk after its batch; --resume keeps unchanged ones and grades the rest."""
+    """Each notebook's record is in the course record after its batch; --resume keeps unchanged ones and grades the
+    rest (a changed notebook, a result retired)."""
     subs, out = tmp_path / "subs", tmp_path / "out"
     for k in range(3):
         _write(subs, f"s{k}", corpus.MASTER.read_text())
     first = grade([subs], out, seed=11, root=ROOT)
-    records = sorted(p.name for p in (out / "records").glob("*.json"))
-    assert records == [f"s{k}_00_warmup__00_warmup.json" for k in range(3)]
+    assert sorted(_current(out)) == [f"s{k}_00_warmup" for k in range(3)]
     assert first["resumed"] == 0
-    # one notebook changes, one record is lost (a run stopped before it): both are graded again
+    # one notebook changes, one result is retired: both are graded again
     _write(subs, "s1", corpus.STUB.read_text())
-    (out / "records" / "s2_00_warmup__00_warmup.json").unlink()
+    term = TermRecord(out)
+    term.retire("s2_00_warmup", "00_warmup", "graded with the wrong tests", "the instructor")
+    term.close()
     again = grade([subs], out, seed=11, root=ROOT, resume=True)
     assert again["resumed"] == 1
     scores = {s: sum(t["points"] for t in r[0]["tests"] if t["passed"]) for s, r in again["students"].items()}
@@ -48,7 +60,8 @@ def test_records_are_written_as_they_are_made_and_resumed(tmp_path):
 
 
 def test_a_killed_driver_keeps_its_records(tmp_path):
-    """A `particles grade` killed mid-run leaves the finished records; --resume grades only the rest."""
+    """A `particles grade` killed mid-run leaves the finished records and its run marked interrupted by the next;
+    --resume grades only the rest."""
     subs, out = tmp_path / "subs", tmp_path / "out"
     for k in range(6):
         _write(subs, f"s{k}", corpus.MASTER.read_text())
@@ -57,35 +70,24 @@ def test_a_killed_driver_keeps_its_records(tmp_path):
     driver = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                               start_new_session=True)
     deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and len(list((out / "records").glob("*.json"))) < 2:
-        time.sleep(0.05)
+    while time.monotonic() < deadline and (not (out / "course.sqlite").exists() or len(_current(out)) < 2):
+        time.sleep(0.1)
     os.killpg(driver.pid, signal.SIGKILL)
     driver.wait()
-    kept = len(list((out / "records").glob("*.json")))
+    kept = len(_current(out))
     assert 2 <= kept
+    book = out / "gradebook.csv"  # a partial gradebook says so (when the run got to write one)
+    assert not book.exists() or "not graded yet" in book.read_text() or kept == 6
     done = subprocess.run(command + ["--resume"], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert f"resumed: {kept} record(s)" in done.stdout or kept == 6
-    assert len(list((out / "records").glob("*.json"))) == 6
+    assert len(_current(out)) == 6
     assert "sandbox: " in done.stdout
-
-
-def test_a_record_cut_off_before_its_rename_is_no_record(tmp_path, monkeypatch):
-    """Killed between writing and renaming: the folder holds no ``*.json`` but the finished ones, nothing to load."""
-    from particles.course.results.records import SubmissionRecord
-    from particles.course.results.store import RecordStore
-
-    subs, out = tmp_path / "subs", tmp_path / "out"
-    _write(subs, "s0", corpus.MASTER.read_text())
-    grade([subs], out, seed=3, root=ROOT)
-    store = RecordStore(out / "records", {"other": "options"})
-    (record,) = [json.loads(p.read_text()) for p in (out / "records").glob("*.json")]
-    monkeypatch.setattr(os, "replace", lambda *args: None)  # the rename never happens
-    store.path("s0_00_warmup", "00_warmup").unlink()
-    record.pop("options")
-    store.save(SubmissionRecord.from_dict(record))
-    assert list((out / "records").glob("*.json")) == []
-    assert len(list((out / "records").glob(".record-*"))) == 1
+    term = TermRecord(out)
+    assert [status for (status,) in term.db.execute("SELECT status FROM runs ORDER BY id")] == ["interrupted",
+                                                                                                "complete"]
+    term.close()
+    assert "not graded yet" not in (out / "gradebook.csv").read_text()
 
 
 def test_a_changed_library_fails_the_run_loudly(tmp_path, monkeypatch):
@@ -112,15 +114,16 @@ deadline = 2026-10-01T23:59:00+01:00
 """
 
 
-def _late_course(tmp_path):
-    """alice and bob submit the master; alice has a 3-day extension, bob is 10 hours late."""
+def _late_course(tmp_path, others=()):
+    """alice and bob submit the master; alice has a 3-day extension, bob is 10 hours late; `others` are on time."""
     subs = tmp_path / "subs"
-    for student in ("alice", "bob"):
+    for student in ("alice", "bob", *others):
         (subs / student).mkdir(parents=True)
         (subs / student / "00_warmup.ipynb").write_text(corpus.MASTER.read_text())
     (tmp_path / "course.toml").write_text(COURSE)
     (tmp_path / "times.csv").write_text("student,exercise,submitted\nalice,00_warmup,2026-10-03T10:00:00+01:00\n"
-                                        "bob,00_warmup,2026-10-02T09:59:00+01:00\n")
+                                        "bob,00_warmup,2026-10-02T09:59:00+01:00\n"
+                                        + "".join(f"{o},00_warmup,2026-10-01T09:00:00+01:00\n" for o in others))
     return subs, {"course": tmp_path / "course.toml", "times": tmp_path / "times.csv", "seed": 5, "root": ROOT}
 
 
@@ -131,7 +134,7 @@ def test_late_work_is_penalized_and_one_student_is_regraded_alone(tmp_path):
     subs, options = _late_course(tmp_path)
     out = tmp_path / "out"
     grade([subs], out, **options)
-    records = {p.name.split("__")[0]: json.loads(p.read_text()) for p in (out / "records").glob("*.json")}
+    records = {student: record.to_dict() for student, record in _current(out).items()}
     assert records["alice"]["late"]["penalty"] == 0 and "(extension of 3 day(s) for alice)" in \
         records["alice"]["late"]["reason"]
     bob = records["bob"]["late"]
@@ -160,10 +163,10 @@ def test_late_work_is_penalized_and_one_student_is_regraded_alone(tmp_path):
 
     # alice hands in the stub instead: only she is graded again
     (subs / "alice" / "00_warmup.ipynb").write_text(corpus.STUB.read_text())
-    bob_bytes = (out / "records" / "bob__00_warmup.json").read_bytes()
+    bob_before = _current(out)["bob"].to_dict()
     again = grade([subs], out, students=["alice"], **options)
     assert list(again["students"]) == ["alice"] and again["students"]["alice"][0].score == 0
-    assert (out / "records" / "bob__00_warmup.json").read_bytes() == bob_bytes
+    assert _current(out)["bob"].to_dict() == bob_before
     gradebook = (out / "gradebook.csv").read_text()
     assert "alice,0,0,11" in gradebook and "bob,9.9,9.9,11" in gradebook
     assert "**Total: 0 / 11 points**" in (out / "alice" / "feedback.md").read_text()
@@ -172,7 +175,7 @@ def test_late_work_is_penalized_and_one_student_is_regraded_alone(tmp_path):
     options["course"].write_text(COURSE + "\n[extensions.bob]\n00_warmup = 1\n")
     resumed = grade([subs], out, resume=True, **options)
     assert resumed["resumed"] == 2 and resumed["students"]["bob"][0].penalty == 0
-    assert json.loads((out / "records" / "bob__00_warmup.json").read_text())["late"]["days_late"] == 0
+    assert _current(out)["bob"].late["days_late"] == 0
     assert "bob,11,11,11" in (out / "gradebook.csv").read_text()
 
 
@@ -201,8 +204,7 @@ def test_resume_grades_again_the_records_of_a_changed_test(tmp_path, monkeypatch
     real = driver.tests_version
     monkeypatch.setattr(driver, "tests_version", lambda root, exercise, library=None: real(root, exercise, "new"))
     assert grade([subs], out, resume=True, **options)["resumed"] == 0 and sorted(graded) == ["alice", "bob"]
-    record = json.loads((out / "records" / "alice__00_warmup.json").read_text())
-    assert record["tests_version"].endswith(" library=new")
+    assert _current(out)["alice"].tests_version.endswith(" library=new")
 
 
 class MemoryRunner:
@@ -238,7 +240,7 @@ class MemoryRecorder:
     """A record stage in a dict, implementing the recorder protocol with nothing on disk."""
 
     def __init__(self):
-        self.records, self.saved, self.marks = {}, [], []
+        self.records, self.saved, self.marks, self.times = {}, [], [], {}
 
     def kept(self, unit, version):
         return None
@@ -253,31 +255,32 @@ class MemoryRecorder:
     def current(self):
         return dict(self.records)
 
-    def regrade(self, units, students):
-        return [u for u in units if u.student in students], {}
+    def start(self, units, times):
+        self.marks.append(("start", len(units)))
+        self.times = {u.student: times(u) for u in units}
 
-    def start(self, count):
-        self.marks.append(("start", count))
+    def finish(self, complete=True):
+        self.marks.append(("finish", complete))
 
-    def finish(self):
-        self.marks.append(("finish",))
+    def pending(self):
+        return []
+
+    def keep_written(self, written):
+        return written
 
 
 def test_a_whole_run_through_memory_run_and_record_stages(tmp_path):
     """grade() with the run and record stages swapped for in-memory fakes: every notebook gets one current record,
     late decisions are made, a lost batch is sent again, then notebook by notebook, and a notebook lost every time
     gets an incomplete record saying why (never a silent 0); the run is marked started and finished."""
-    subs, options = _late_course(tmp_path)
-    for student in ("carl", "dana", "eve"):
-        (subs / student).mkdir()
-        (subs / student / "00_warmup.ipynb").write_text(corpus.MASTER.read_text())
-    (subs / "malformed").mkdir()
+    subs, options = _late_course(tmp_path, others=("carl", "dana", "eve", "malformed"))
     (subs / "malformed" / "00_warmup.ipynb").write_text('{"cells": [')
     runner, recorder, seen = MemoryRunner(lose={"dana"}), MemoryRecorder(), []
     summary = grade([subs], None, runner=runner, recorder=recorder, progress=seen.append, jobs=1, **options)
     assert sorted(s for s, _ in recorder.records) == ["alice", "bob", "carl", "dana", "eve", "malformed"]
     assert sorted(r.student for r in seen) == sorted(recorder.saved) == sorted(summary["students"])
-    assert recorder.marks == [("start", 5), ("finish",)] and runner.closed == "done"
+    assert recorder.marks == [("start", 6), ("finish", True)] and runner.closed == "done"
+    assert recorder.times["bob"][1] == "the times file"
     # dana's batch: sent, lost, sent again, lost, then cut into single notebooks; dana alone is lost twice more
     dana_batches = [b for b in runner.submitted if "dana" in b]
     assert len(dana_batches[0]) > 1 and dana_batches[0] == dana_batches[1] and dana_batches[2:] == [["dana"]] * 2
@@ -295,13 +298,11 @@ def test_a_whole_run_through_memory_run_and_record_stages(tmp_path):
 
 def test_an_interrupted_run_stays_marked_incomplete_and_its_runner_drops_what_has_not_started(tmp_path):
     """A run stopped in its run stage (here Ctrl-C after the first batch) closes its runner with the batches not
-    started dropped, keeps the records it collected, and leaves its output folder marked incomplete."""
-    from particles.course.grading.record import INCOMPLETE
+    started dropped, keeps the records it collected, says in its gradebook what is not graded yet, and is marked
+    interrupted in the course record; --resume finishes it."""
+    from particles.course.grading.driver import GradingInterrupted
 
-    subs, options = _late_course(tmp_path)
-    for student in ("carl", "dana"):  # two batches of two
-        (subs / student).mkdir()
-        (subs / student / "00_warmup.ipynb").write_text(corpus.MASTER.read_text())
+    subs, options = _late_course(tmp_path, others=("carl", "dana"))  # two batches of two
 
     class Interrupted(MemoryRunner):
         def completed(self):
@@ -311,10 +312,15 @@ def test_an_interrupted_run_stays_marked_incomplete_and_its_runner_drops_what_ha
                 yield outcome
 
     runner, out = Interrupted(), tmp_path / "out"
-    with pytest.raises(KeyboardInterrupt):
+    with pytest.raises(GradingInterrupted, match="interrupted: 2 of 4 graded; rerun with --resume"):
         grade([subs], out, runner=runner, jobs=2, **options)
     assert runner.closed == "cancelled"
-    assert "has not finished" in (out / INCOMPLETE).read_text()
-    assert len(list((out / "records").glob("*.json"))) == 2
+    assert len(_current(out)) == 2
+    book = (out / "gradebook.csv").read_text()
+    assert book.count("00_warmup not graded yet (this run has not finished; rerun with --resume)") == 2
+    term = TermRecord(out)
+    assert term.db.execute("SELECT status FROM runs").fetchall() == [("interrupted",)]
+    assert len(term.pending()) == 2
+    term.close()
     grade([subs], out, runner=MemoryRunner(), resume=True, jobs=2, **options)
-    assert not (out / INCOMPLETE).exists()
+    assert len(_current(out)) == 4 and "not graded yet" not in (out / "gradebook.csv").read_text()

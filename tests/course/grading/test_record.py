@@ -1,11 +1,9 @@
-"""The record stage: a result decided, saved, reported and counted as it arrives; a run marked until it finishes."""
+"""The record stage: a result decided, saved, reported and counted as it arrives; what a run has still to grade."""
 
 from pathlib import Path
 
-import pytest
-
 from particles.course.grading.discovery import Unit
-from particles.course.grading.record import INCOMPLETE, Collector, FolderRecorder, MemoryRecorder
+from particles.course.grading.record import Collector, MemoryRecorder
 from particles.course.results.records import SubmissionRecord, TestRecord
 
 
@@ -26,11 +24,13 @@ def test_the_collector_decides_saves_reports_and_counts_each_result():
         return record
 
     earlier = _record("zoe")
-    collect = Collector(recorder, late, report=lambda done, students: reported.append((len(done), students)),
+    collect = Collector(recorder, late, report=lambda done, students, todo: reported.append((len(done), students,
+                                                                                              todo)),
                         progress=seen.append, done={("zoe", "00_warmup"): earlier})
+    collect.todo = {("ann", "00_warmup"), ("bob", "00_warmup"), ("cy", "00_warmup")}
     collect([_record("ann"), _record("bob", passed=False)])
     assert decided == ["ann", "bob"] and [r.student for r in seen] == ["ann", "bob"]
-    assert reported == [(3, ["ann", "bob"])]
+    assert reported == [(3, ["ann", "bob"], [("cy", "00_warmup")])] and collect.collected == 2
     assert set(recorder.current()) == {("ann", "00_warmup"), ("bob", "00_warmup")}
     assert recorder.current()[("ann", "00_warmup")].late == {"penalty": 0.0, "student": "ann"}
     assert collect.done[("zoe", "00_warmup")] is earlier and collect.done[("bob", "00_warmup")].score == 0
@@ -51,31 +51,13 @@ def test_a_kept_record_is_saved_again_only_when_its_late_decision_changed():
     assert recorder.current()[("bob", "00_warmup")].late["reason"] == "extension"
 
 
-def test_the_folder_recorder_marks_a_run_until_it_finishes_and_keeps_records_as_files(tmp_path):
-    """start() writes the incomplete mark (the gradebook is partial), finish() removes it; save, update and
-    current go through the records folder; regrade names the students it knows."""
-    recorder = FolderRecorder(tmp_path, {"seed": 1})
-    recorder.start(3)
-    assert "of 3 notebook(s), has not finished" in (tmp_path / INCOMPLETE).read_text()
-    recorder.save(_record("ann"))
-    record = _record("ann")
-    record.late = {"penalty": 1.0}
-    recorder.update(record)
-    assert recorder.current()[("ann", "00_warmup")].late == {"penalty": 1.0}
-    recorder.finish()
-    assert not (tmp_path / INCOMPLETE).exists()
-    units, others = recorder.regrade([Unit("ann", "00_warmup", Path("ann.ipynb"))], ["ann"])
-    assert [u.student for u in units] == ["ann"] and others == {}
-    with pytest.raises(ValueError, match="unknown student 'bob'"):
-        recorder.regrade([Unit("ann", "00_warmup", Path("ann.ipynb"))], ["bob"])
-
-
-def test_the_memory_recorder_keeps_nothing_for_a_later_run():
-    """A run without an output folder resumes nothing and cannot regrade one student."""
+def test_the_memory_recorder_keeps_nothing_for_a_later_run_and_knows_what_is_left():
+    """A run without an output folder resumes nothing; until it finishes, what it has not graded is pending."""
     recorder = MemoryRecorder()
-    recorder.start(1)
-    assert recorder.kept(Unit("ann", "00_warmup", Path("ann.ipynb")), "v") is None and recorder.complete is False
+    units = [Unit("ann", "00_warmup", Path("ann.ipynb")), Unit("bob", "00_warmup", Path("bob.ipynb"))]
+    recorder.start(units, lambda unit: (None, ""))
+    assert recorder.kept(units[0], "v") is None and recorder.complete is False
+    recorder.save(_record("ann"))
+    assert recorder.pending() == [("bob", "00_warmup", None)]
     recorder.finish()
-    assert recorder.complete is True
-    with pytest.raises(ValueError, match="student needs the records of an earlier run"):
-        recorder.regrade([], ["ann"])
+    assert recorder.complete is True and recorder.pending() == []

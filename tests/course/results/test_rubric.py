@@ -142,7 +142,7 @@ def test_feedback_gradebook_and_results_show_the_written_grades(tmp_path):
     assert "Half, see &lt;the&gt; norm" in page and "<the>" not in page and "no answer" in page
     write_gradebook(tmp_path / "gradebook.csv", {"ada": [ada], "bob": [bob]}, [EXERCISE])
     lines = (tmp_path / "gradebook.csv").read_text().splitlines()
-    assert lines[1:] == ["ada,8.5,8.5,17", "bob,5,5,17"]
+    assert lines[1:] == ["ada,8.5,8.5,17,complete", "bob,5,5,17,complete"]
     data = gradescope_results("ada", [ada], manual=written.manual())
     jsonschema.validate(data, GRADESCOPE_SCHEMA)
     assert data["score"] == 8.5 and data["max_score"] == 17
