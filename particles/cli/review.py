@@ -10,7 +10,8 @@ def run(args):
     from ..course.results.review import write_review
 
     try:
-        summary = write_review(args.submissions, args.out, root=course_root(args), exercise=args.exercise)
+        summary = write_review(args.submissions, args.out, root=course_root(args), exercise=args.exercise,
+                               roster=args.roster)
     except ValueError as error:  # an unknown exercise, a master's unreadable points, a file in the way
         print(f"particles review: {error}", file=sys.stderr)
         return 2
@@ -39,5 +40,7 @@ def register(commands):
     review.add_argument("submissions", nargs="+", metavar="SUBMISSION", help="a notebook or a folder of them")
     review.add_argument("--out", required=True, metavar="DIR", help="the folder to write the pages and rubrics to")
     review.add_argument("--exercise", help="read every notebook as this exercise (as `particles grade` does)")
+    review.add_argument("--roster", metavar="FILE", help="who is in the course (default: the course file's roster): "
+                        "students named as `particles grade` names them")
     add_root(review)
     review.set_defaults(run=run)

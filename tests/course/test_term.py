@@ -11,6 +11,7 @@ feedback: tests + written answers - late penalty, each part shown.
 import csv
 import json
 import re
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -191,3 +192,198 @@ def test_a_whole_term(tmp_path):
     fox = next(row for row in moodle if row["Email address"] == "fox@example.edu")
     assert float(fox[EXERCISE]) == 0 and fox[f"{EXERCISE} feedback"] == lms.MOODLE_MISSING
     assert len(moodle) == len(TERM)
+
+
+# -- a term of two exercises from two LMSs, into one course record ---------------------------------------------
+
+SECOND = "01_integrator_order"
+TERM_COURSE = f"""
+roster = "roster.csv"
+
+[late]
+penalty_per_day = 0.10
+cap = 0.30
+
+[exercises.{EXERCISE}]
+deadline = {DEADLINE}
+
+[exercises.{SECOND}]
+deadline = 2026-10-15T23:59:00+01:00
+
+[extensions.{{judy}}]
+{EXERCISE} = 2
+"""
+ROSTER_LINES = [  # submission_name, name, canvas_id, sis_login_id, email, aliases
+    ("john1", "John Smith", "2000", "smithjohn", "john.smith@uni.edu", ""),
+    ("john2", "John Smith", "2001", "smithjohn2", "john.smith2@uni.edu", ""),
+    ("alice", "Alice Smith", "2003", "alicesmith", "alice@uni.edu", "asmith; Alice S."),
+    ("judy", "Judy Kim", "2002", "judyk", "judy@uni.edu", ""),
+    ("bob", "Bob Lee", "2004", "boblee", "bob@uni.edu", ""),
+    ("grace", "Grace Ho", "2005", "graceho", "grace@uni.edu", ""),
+    ("henry", "Henry Wu", "2006", "henrywu", "henry@uni.edu", ""),
+]
+CANVAS_FILES = {  # Canvas's download of exercise 00: name -> what it holds
+    "smithjohn_2000_5001_00_warmup.ipynb": "master",        # two students called John Smith, two user ids
+    "smithjohn_2001_5002_00_warmup.ipynb": "wrong",
+    "alicesmith_LATE_2003_5003_00_warmup.ipynb": "master",  # Canvas says late; the times file says on time
+    "judyk_2002_5004_00_warmup.ipynb": "stub",              # judy's first upload ...
+    "judyk_2002_5009_00_warmup-1.ipynb": "master",          # ... and her re-upload: graded
+    "boblee_2004_5005_00_warmup.ipynb": "master",           # bob hands in here and in a folder: a conflict
+}
+TERM_TIMES = {"john1": "2026-10-01T20:00:00+01:00", "john2": "2026-10-02T09:00:00+01:00",  # john2: 1 day late
+              "asmith": "2026-10-01T21:00:00+01:00", "judyk": "2026-10-03T09:00:00+01:00",  # judy: extension
+              "bob": "2026-10-01T22:00:00+01:00"}
+
+
+def _term_files(tmp_path):
+    """The roster, the course file, Canvas's zip of exercise 00 (and bob's second copy), Gradescope's export of 01."""
+    lines = ["submission_name,name,canvas_id,sis_login_id,email,aliases"]
+    lines += [",".join(f'"{cell}"' for cell in line) for line in ROSTER_LINES]
+    (tmp_path / "roster.csv").write_text("\n".join(lines) + "\n")
+    (tmp_path / "course.toml").write_text(TERM_COURSE.replace("{judy}", "judyk"))
+    master, wrong = _notebooks()
+    stub = (ROOT / "exercises" / f"{EXERCISE}.ipynb").read_text()
+    texts = {"master": json.dumps(master), "wrong": json.dumps(wrong), "stub": stub}
+    canvas = tmp_path / "canvas-00.zip"
+    with zipfile.ZipFile(canvas, "w") as archive:
+        for name, kind in CANVAS_FILES.items():
+            archive.writestr(name, texts[kind])
+    (tmp_path / "folder" / "bob").mkdir(parents=True)
+    (tmp_path / "folder" / "bob" / f"{EXERCISE}.ipynb").write_text(texts["master"])
+    times = ["student,exercise,submitted"] + [f"{s},{EXERCISE},{t}" for s, t in TERM_TIMES.items()]
+    (tmp_path / "times.csv").write_text("\n".join(times) + "\n")
+    second = (ROOT / "solutions" / f"{SECOND}.ipynb").read_text()
+    metadata = ("submission_301:\n  :submitters:\n  - :name: Alice Smith\n    :sid: '9'\n    :email: alice@uni.edu\n"
+                "  :created_at: 2026-10-17 10:00:00.123456000 +01:00\n"
+                "submission_302:\n  :submitters:\n  - :name: Grace Ho\n    :email: grace@uni.edu\n"
+                "  - :name: Henry Wu\n    :email: Henry@Uni.edu\n  :created_at: 2026-10-15 20:00:00 +01:00\n")
+    gradescope = tmp_path / "gradescope-01.zip"
+    with zipfile.ZipFile(gradescope, "w") as archive:
+        archive.writestr("assignment_77_export/submission_metadata.yml", metadata)
+        archive.writestr(f"assignment_77_export/submission_301/{SECOND}.ipynb", second)
+        archive.writestr(f"assignment_77_export/submission_302/{SECOND}.ipynb", second)
+    return canvas, gradescope
+
+
+def _cli(*args):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "particles", "grade", *map(str, args), "--root", str(ROOT)],
+                          capture_output=True, text=True, timeout=900)
+
+
+def _interrupted(submissions, common, out):
+    """Start `particles grade`, send SIGINT to its process group (as Ctrl-C at a terminal does) once its session
+    runs; (the finished process, seconds from the signal to its end)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from particles.course.term.database import TermRecord
+
+    command = [sys.executable, "-m", "particles", "grade", str(submissions), *map(str, common), "--root", str(ROOT)]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               start_new_session=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:  # the run has registered its notebooks: its session starts now
+        term = TermRecord(out)
+        running = term.db.execute("SELECT count(*) FROM runs WHERE status = 'running'").fetchone()[0]
+        term.close()
+        if running:
+            break
+        time.sleep(0.1)
+    time.sleep(1.5)
+    os.killpg(process.pid, signal.SIGINT)
+    start = time.monotonic()
+    stdout, stderr = process.communicate(timeout=60)
+    return subprocess.CompletedProcess(command, process.returncode, stdout, stderr), time.monotonic() - start
+
+
+def _book(out):
+    with open(out / "gradebook.csv", newline="") as handle:
+        return {row["student"]: row for row in csv.DictReader(handle)}
+
+
+def _totals_explained(out, book):
+    """Every student's gradebook total is the sum of what their feedback explains, exercise by exercise."""
+    for student, row in book.items():
+        feedback = (out / student / "feedback.md").read_text()
+        overall = float(re.search(r"\*\*Total: ([\d.]+) / [\d.]+ points\*\*", feedback).group(1))
+        assert float(row["total"]) == pytest.approx(overall), student
+
+
+@pytest.mark.slow
+def test_a_term_from_two_lms_into_one_course_record(tmp_path):
+    """Two exercises graded in separate runs into one record: Canvas (same-name students apart, the re-upload
+    graded, LATE_ checked), a conflict resolved for good, Gradescope (its times, a group graded per member), one
+    student under two LMS names in one row; typos refused; a regrade keeping written points and the late decision;
+    Ctrl-C, then --resume. Every total explained."""
+    canvas, gradescope = _term_files(tmp_path)
+    out, course = tmp_path / "out", tmp_path / "course.toml"
+    common = ["--course", course, "--seed", 7, "--jobs", 2, "--out", out]
+
+    # typos in the course file and in the times file: exit 2, naming them, nothing graded
+    course.write_text(TERM_COURSE.replace("{judy}", "judykm"))
+    done = _cli(canvas, *common, "--times", tmp_path / "times.csv")
+    assert done.returncode == 2 and "[extensions.judykm]: 'judykm' is no student of the roster's 7 students" in \
+        done.stderr and "nothing was graded" in done.stderr
+    course.write_text(TERM_COURSE.replace("{judy}", "judyk"))
+    bad = tmp_path / "bad-times.csv"
+    bad.write_text((tmp_path / "times.csv").read_text().replace("asmith,", "asmyth,"))
+    done = _cli(canvas, *common, "--times", bad)
+    assert done.returncode == 2 and "line 4: student 'asmyth'" in done.stderr
+    # no time at all for a deadline: exit 2, naming the students; nothing graded, nothing late
+    done = _cli(canvas, *common)
+    assert done.returncode == 2 and "no submission time for" in done.stderr and "john1 (00_warmup)" in done.stderr
+    assert not (out / "gradebook.csv").exists() and not list(out.glob("*/feedback.md"))
+
+    # exercise 00 from Canvas, with bob's second copy in a folder: a conflict
+    done = _cli(canvas, tmp_path / "folder", *common, "--times", tmp_path / "times.csv")
+    assert done.returncode == 1, done.stderr  # the conflict was scored 0 without being run
+    assert "graded the latest upload" in done.stderr and "judyk_2002_5009_00_warmup-1.ipynb" in done.stderr
+    assert "Canvas marked it late (LATE_)" in done.stderr
+    book = _book(out)
+    assert float(book["john1"][EXERCISE]) > float(book["john2"][EXERCISE]) > 0  # two John Smiths, two rows
+    assert float(book["judy"][EXERCISE]) == float(book["john1"][EXERCISE])  # the re-upload, on time (extension)
+    assert float(book["bob"][EXERCISE]) == 0 and "john2" in book
+    # the conflict resolved: bob's folder copy removed, bob regraded; no second row, ever
+    (tmp_path / "folder" / "bob" / f"{EXERCISE}.ipynb").unlink()
+    done = _cli(canvas, *common, "--times", tmp_path / "times.csv", "--student", "bob")
+    assert done.returncode == 0, done.stderr
+    assert float(_book(out)["bob"][EXERCISE]) == float(book["john1"][EXERCISE])
+
+    # written answers graded for john1; john2's late decision made
+    rubric = tmp_path / "rubric.csv"
+    rubric.write_text(f"{','.join(COLUMNS)}\n{EXERCISE},smithjohn,1,2,1.5,Good\n")
+    done = _cli(canvas, *common, "--times", tmp_path / "times.csv", "--rubric", rubric, "--resume")
+    assert done.returncode == 0, done.stderr
+    before = _book(out)
+    assert float(before["john1"][EXERCISE]) == float(book["john1"][EXERCISE]) + 1.5
+
+    # exercise 01 from Gradescope, stopped with Ctrl-C while its session runs: one line, within 2 s, then --resume
+    stopped, seconds = _interrupted(gradescope, common, out)
+    assert stopped.returncode == 130 and "Traceback" not in stopped.stderr, stopped.stderr
+    assert stopped.stderr.strip().splitlines()[-1].startswith("particles grade: interrupted: ")
+    assert stopped.stderr.strip().endswith("graded; rerun with --resume") and seconds < 3, (seconds, stopped.stderr)
+    assert "not graded yet" in (out / "gradebook.csv").read_text()
+    done = _cli(gradescope, *common, "--resume")
+    assert done.returncode == 0, done.stderr
+    # alice (Canvas's alicesmith) in the same row, late from created_at; the group graded per member
+    book = _book(out)
+    assert set(book) == {"john1", "john2", "alice", "judy", "bob", "grace", "henry"}
+    assert book["alice"][EXERCISE] and book["alice"][SECOND] and book["grace"][SECOND] == book["henry"][SECOND]
+    alice = json.loads((out / "alice" / "results.json").read_text())
+    assert alice["extra_data"]["late"][SECOND]["days_late"] == 2
+    assert "Gradescope's submission_metadata.yml" in alice["extra_data"]["late"][SECOND]["source"]
+    assert float(book["alice"][SECOND]) < float(book["grace"][SECOND])
+
+    # john1 regraded alone, without the rubric or the times file: written points and late decisions kept
+    done = _cli(canvas, *common, "--student", "john1")
+    assert done.returncode == 0, done.stderr
+    after = _book(out)
+    assert after["john1"][EXERCISE] == before["john1"][EXERCISE] and after["john2"] == book["john2"]
+    assert "Question 1 | 1.5 / 2 | Good" in (out / "john1" / "feedback.md").read_text()
+    _totals_explained(out, after)

@@ -46,7 +46,7 @@ from .discovery import find_submissions
 from .options import GradeOptions
 from .plan import plan_batches
 from .record import Collector, MemoryRecorder
-from .report import progress_report, summarize, write_gradescope, write_reports
+from .report import progress_report, summarize, write_gradescope, write_partial_gradebook, write_reports
 from .run import LocalRunner, SessionSettings, run_all
 from .session import catalog, rejected_record
 from .versions import library_digest, tests_version
@@ -215,7 +215,8 @@ def run_grading(options, progress=None, runner=None, recorder=None):
         See :func:`grade`.
     """
     course = find_course(options.root, list(options.tests), options.course)                    # read
-    roster_path = options.roster or (course.roster if course is not None else None)
+    # Gradescope's one submission (--metadata) checks only its own names: the course's roster is not needed
+    roster_path = options.roster or (course.roster if course is not None and options.metadata is None else None)
     roster = read_roster(roster_path) if roster_path is not None else None
     plan, before = decide_walls(options)
     recorder, identity = open_record(options, roster, recorder)
@@ -227,6 +228,8 @@ def run_grading(options, progress=None, runner=None, recorder=None):
         complete = True
     except KeyboardInterrupt:
         collect = state.get("collect")
+        if collect is not None:  # the gradebook says what is not graded yet
+            write_partial_gradebook(options, collect.done, sorted(collect.todo))
         graded = collect.collected if collect is not None else 0
         raise GradingInterrupted(graded, graded + (len(collect.todo) if collect is not None else 0)) from None
     finally:

@@ -8,11 +8,12 @@ up to date in the record too. The formats themselves are :mod:`particles.course.
 from pathlib import Path
 
 from ..results.records import SubmissionRecord, TestRecord
-from ..results.reports import gradescope_results, write_json, write_outputs
+from ..results.reports import gradescope_results, write_gradebook, write_json, write_outputs
 from ..walls import isolation as isolation_module
 from .session import catalog
 
-__all__ = ["progress_report", "statuses", "summarize", "write_reports", "write_gradescope", "LIBRARY_CHANGED"]
+__all__ = ["progress_report", "statuses", "write_partial_gradebook", "summarize", "write_reports", "write_gradescope",
+           "LIBRARY_CHANGED"]
 
 LIBRARY_CHANGED = "LIBRARY-CHANGED.txt"
 """The file in the output folder of a run during which the installed library changed."""
@@ -55,6 +56,19 @@ def progress_report(options, written):
                       written=written, status=status)
 
     return report
+
+
+def write_partial_gradebook(options, done, todo):
+    """The gradebook of a run stopped early (Ctrl-C): every record so far, and what is not graded yet (no feedback
+    is drawn: this must be quick)."""
+    if options.out is None:
+        return
+    by_student = {}
+    for (student, _), record in done.items():
+        by_student.setdefault(student, []).append(record)
+    exercises = [name for name in options.tests if any(e == name for _, e in [*done, *todo])]
+    write_gradebook(options.out / "gradebook.csv", by_student, exercises,
+                    statuses(done, [(s, e, None) for s, e in todo]))
 
 
 def summarize(tests, units, done, problems, plan, kept, others):

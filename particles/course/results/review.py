@@ -35,7 +35,9 @@ import os
 import tempfile
 from pathlib import Path
 
+from ..grading.deadlines import find_course
 from ..grading.discovery import find_submissions, released_exercise
+from ..term.roster import read_roster
 from ..grading.intake import NotebookRejected, read_notebook
 from ..paths import exercise_tests, project_root
 from ..release.answers import (answer_cells, answers_of, cell_source, model_answers, question_points, questions_of,
@@ -234,7 +236,7 @@ def _rubric(path, exercise, students, points):
     return stream.getvalue(), sum(1 for row in kept.values() if (row.get("points") or row.get("comment")))
 
 
-def write_review(paths, out, *, root=None, exercise=None):
+def write_review(paths, out, *, root=None, exercise=None, roster=None):
     """Write the review pages and the rubrics of the written answers of `paths`.
 
     Parameters
@@ -247,6 +249,9 @@ def write_review(paths, out, *, root=None, exercise=None):
         The course folder (default: found from the current directory).
     exercise : str, optional
         Read every notebook as this exercise (``particles grade --exercise``).
+    roster : path, optional
+        The roster (default: the course file's ``roster``, if any): the students are named as ``particles grade``
+        names them, their aliases matched (:mod:`particles.course.term.identity`).
 
     Returns
     -------
@@ -264,7 +269,11 @@ def write_review(paths, out, *, root=None, exercise=None):
     tests = exercise_tests(root)
     if exercise is not None and exercise not in tests:
         raise ValueError(f"unknown exercise {exercise!r}; expected one of {', '.join(map(repr, tests))}")
-    units, problems = find_submissions(paths, list(tests), exercise)
+    if roster is None:
+        course = find_course(root, list(tests))
+        roster = course.roster if course is not None else None
+    identity = read_roster(roster).identity() if roster is not None else None
+    units, problems = find_submissions(paths, list(tests), exercise, identity=identity)
     out = Path(out)
     pages, rubrics, index, kept = [], [], [], 0
     for name in [n for n in tests if any(u.exercise == n for u in units)]:

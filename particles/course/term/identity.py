@@ -140,13 +140,17 @@ class Identity:
         if person is None and not (ids and self._taken_by_other_ids(name, ids)):
             person = self.find(name)
         if person is not None:
-            return self.add(Person(person.name, list(aliases)))
+            return self.add(Person(person.name, self._free(aliases, person.name)))
         if self.closed:
             return None
         own = filing_name(name)
         if self.find(own) is not None or own in self.people:
             own = filing_name(f"{own}_{next(iter(ids.values()), len(self.people))}")
-        return self.add(Person(own, [("submission_name", name), *aliases]))
+        return self.add(Person(own, self._free([("submission_name", name), *aliases], own)))
+
+    def _free(self, aliases, name):
+        """The aliases that name no other student than `name` (a login two Canvas users share names neither)."""
+        return [(k, v) for k, v in aliases if v and self._keys.get(_alias_key(k, v), name) == name]
 
     def _taken_by_other_ids(self, name, ids):
         """Whether `name` belongs to a student known under another identifier of a kind in `ids`."""

@@ -257,3 +257,61 @@ def test_names_written_composed_and_decomposed_are_one_student(tmp_path):
     put(tmp_path / "jos\u00e9.ipynb")
     units, _ = found([tmp_path])
     assert list(units) == ["Jos\u00e9"] and "none was graded" in units["Jos\u00e9"].rejected
+
+
+# -- who is who: Canvas's user ids, Gradescope's groups and times, the roster's aliases ------------------------
+
+
+def test_two_canvas_students_with_one_login_stay_two_and_each_gets_their_latest_upload(tmp_path):
+    """Canvas's user id, not its login, says whose a file is; of one user's files the largest attachment id wins."""
+    work = tmp_path / "work"
+    work.mkdir(mode=0o700)
+    canvas = make_zip(tmp_path / "canvas.zip", {"smithjohn_2000_5001_00_warmup.ipynb": notebook(),
+                                                "smithjohn_2001_5002_00_warmup.ipynb": notebook(),
+                                                "smithjohn_2001_5007_00_warmup.ipynb": notebook()})
+    units, problems = found([canvas], workdir=work)
+    assert sorted(units) == ["smithjohn", "smithjohn_2001"] and not any(u.rejected for u in units.values())
+    assert units["smithjohn_2001"].origin.endswith("smithjohn_2001_5007_00_warmup.ipynb")
+    assert problems == [f"{canvas}:smithjohn_2001_5002_00_warmup.ipynb: smithjohn_2001 has several notebooks for "
+                        f"00_warmup; graded the latest upload, {canvas}:smithjohn_2001_5007_00_warmup.ipynb"]
+
+
+def test_a_gradescope_group_is_graded_once_per_member_at_its_created_at(tmp_path):
+    """Every submitter of a Gradescope submission gets the notebook, with the submission's created_at."""
+    from datetime import datetime, timedelta, timezone
+
+    work = tmp_path / "work"
+    work.mkdir(mode=0o700)
+    export = make_zip(tmp_path / "gs.zip", {
+        "export/submission_metadata.yml": "submission_5:\n  :submitters:\n  - :name: A\n    :email: a@uni.edu\n"
+        "  - :name: B\n    :sid: '77'\n    :email: b@uni.edu\n  :created_at: 2026-10-02 10:00:00.5 -07:00\n",
+        "export/submission_5/00_warmup.ipynb": notebook(), "export/submission_6/00_warmup.ipynb": notebook()})
+    units, problems = found([export], workdir=work)
+    assert sorted(units) == ["a@uni.edu", "b@uni.edu", "submission_6"] and problems == []
+    when = datetime(2026, 10, 2, 10, 0, 0, 500000, tzinfo=timezone(timedelta(hours=-7)))
+    assert units["a@uni.edu"].submitted == units["b@uni.edu"].submitted == when
+    assert units["b@uni.edu"].aliases == (("email", "b@uni.edu"), ("sid", "77"))
+    assert units["submission_6"].submitted is None
+
+
+def test_the_roster_joins_one_students_names_from_two_lms_and_names_strangers(tmp_path):
+    """With a roster, Canvas's login and Gradescope's e-mail of one student are that student; a name that is no
+    roster student's is graded under its own name and reported."""
+    from particles.course.term.identity import Identity, Person
+
+    work = tmp_path / "work"
+    work.mkdir(mode=0o700)
+    course = Identity([Person("alice", [("login", "alicesmith"), ("email", "alice@uni.edu")]),
+                       Person("bob", [("canvas_id", "12")])], closed=True)
+    canvas = make_zip(tmp_path / "canvas.zip", {"alicesmith_10_20_00_warmup.ipynb": notebook(),
+                                                "someone_12_21_00_warmup.ipynb": notebook(),
+                                                "zed_13_22_00_warmup.ipynb": notebook()})
+    gradescope = make_zip(tmp_path / "gs.zip", {
+        "x/submission_metadata.yml": "submission_1:\n  :submitters:\n  - :email: Alice@Uni.edu\n",
+        "x/submission_1/01_integrator_order.ipynb": notebook("01_integrator_order")})
+    units, problems = find_submissions([canvas, gradescope], EXERCISES, workdir=work, identity=course)
+    assert sorted((u.student, u.exercise) for u in units) == [("alice", "00_warmup"), ("alice", "01_integrator_order"),
+                                                              ("bob", "00_warmup"), ("zed", "00_warmup")]
+    assert [u.on_roster for u in units if u.student == "zed"] == [False]
+    assert problems == [f"{canvas}:zed_13_22_00_warmup.ipynb: 'zed' is no student of the roster (nor an alias of "
+                        "one): graded as zed; add the name to their roster line's aliases"]
