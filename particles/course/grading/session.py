@@ -81,6 +81,9 @@ def _environment(root):
 
 _RUNNING = set()  # the sessions running now (Popen objects), so that a stopped run can stop them at once
 _RUNNING_LOCK = threading.Lock()
+PARSING = threading.Lock()
+"""Held while a grading thread parses Python (the tests' imports, a notebook's answers): CPython 3.11's parser is
+not safe in two threads at once ("AST constructor recursion depth mismatch", python/cpython#106905)."""
 STOPPING = threading.Event()
 """Set while a stopped run ends: no new session starts (cleared when a run starts: :class:`~particles.course.grading.run.LocalRunner`)."""
 
@@ -234,7 +237,8 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
     memory_mb = None if memory_mb is None else check_limit("memory_mb", memory_mb)
     seeds = [secrets.randbelow(2**31) for _ in units] if seeds is None else [int(s) for s in seeds]
     test_file = exercise_tests(root)[units[0].exercise]
-    version = tests_version(root, units[0].exercise)  # before the session reads them
+    with PARSING:
+        version = tests_version(root, units[0].exercise)  # before the session reads them
     timeout = timeout or 300 + 120 * len(units)
     token = secrets.token_bytes(32)  # this session's signing key, never written to a file or an environment
     start = time.perf_counter()
@@ -288,8 +292,9 @@ def grade_batch(units, root, *, seeds=None, public_only=False, time_limit=None, 
             tests = catalog(root, units[0].exercise, public_only, python)
         except RuntimeError:
             tests = []
-    return [_result(u, seed, data.get(str(k)), status, tests, elapsed / len(units), trouble, root, version)
-            for k, (u, seed) in enumerate(zip(units, seeds))]
+    with PARSING:
+        return [_result(u, seed, data.get(str(k)), status, tests, elapsed / len(units), trouble, root, version)
+                for k, (u, seed) in enumerate(zip(units, seeds))]
 
 
 def grade_unit(unit, root, *, seed=None, **options):
