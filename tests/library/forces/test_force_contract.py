@@ -18,8 +18,8 @@ import pytest
 import particles
 from particles.constraints import RigidRods
 from particles.effects import Boids, Containment
-from particles.forces import (Attractor, Damping, Field, Force, Gravity, LennardJones, NBodyGravity, SurfaceWind, Vortex,
-                              Wind)
+from particles.forces import (Attractor, Damping, Field, Force, Gravity, LennardJones, NBodyGravity, SurfaceWind,
+                              Vortex, Wind)
 from particles.springs import Bending, Clamp, Springs
 
 N = 12  # particles of every test configuration
