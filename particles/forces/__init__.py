@@ -18,7 +18,9 @@ in :mod:`particles.effects.flocking`.
   :func:`scatter_pair_forces`;
 * :mod:`particles.forces.nbody`: :class:`NBodyGravity`, all pairs;
 * :mod:`particles.forces.lennardjones`: :class:`LennardJones`, short range on the bucket grid
-  (:mod:`particles.neighbors`).
+  (:mod:`particles.neighbors`);
+* :mod:`particles.forces.surfacewind`: :class:`SurfaceWind`, Provot's wind on the triangles of a surface
+  (along each normal, from the air's velocity relative to it).
 
 The contract every force keeps is tested for every subclass of
 :class:`Force` in the package (``tests/library/forces/test_force_contract.py``): it does not
@@ -32,6 +34,7 @@ from .fields import Attractor, Damping, Field, Force, Gravity, Vortex, Wind
 from .lennardjones import LennardJones
 from .nbody import NBodyGravity
 from .pairs import pair_differences, scatter_pair_forces
+from .surfacewind import SurfaceWind
 
 __all__ = ["Force", "Gravity", "Damping", "Wind", "Attractor", "Vortex", "Field", "NBodyGravity", "LennardJones",
-           "pair_differences", "scatter_pair_forces"]
+           "SurfaceWind", "pair_differences", "scatter_pair_forces"]

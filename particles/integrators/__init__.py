@@ -10,12 +10,16 @@ As SciPy groups ``integrate/_ivp``: the methods, what they share, and the driver
 * :mod:`particles.integrators.loop`: :func:`integrate` (the library's one time loop), :func:`step_times`, the
   divergence guard;
 * :mod:`particles.integrators.solvers`: the stepper and solver forms of a method (:class:`Solver`,
-  :func:`as_stepper`) and :func:`after`, which wraps a method with a fix.
+  :func:`as_stepper`) and :func:`after`, which wraps a method with a fix;
+* :mod:`particles.integrators.adaptive`: :func:`step_doubling`, a run whose step adapts to an error estimate
+  (one step of ``h`` against two of ``h/2``).
 """
 
+from .adaptive import AdaptiveRun, step_doubling
 from .loop import BLOWUP_FACTOR, integrate, step_times
 from .solvers import Solver, after, as_stepper, is_solver
 from .steppers import INTEGRATORS, euler, implicit_euler, midpoint, rk4, symplectic_euler, trapezoid, verlet
 
 __all__ = ["euler", "midpoint", "trapezoid", "rk4", "symplectic_euler", "verlet", "implicit_euler", "INTEGRATORS",
-           "integrate", "step_times", "BLOWUP_FACTOR", "Solver", "as_stepper", "is_solver", "after"]
+           "integrate", "step_times", "BLOWUP_FACTOR", "Solver", "as_stepper", "is_solver", "after", "step_doubling",
+           "AdaptiveRun"]

@@ -8,12 +8,15 @@ As Newton's ``solvers/xpbd``: the constraints, their colouring and the solver
 * :mod:`particles.xpbd.colouring`: groups of constraints that share no particle, for Gauss-Seidel sweeps
   (:func:`color_constraints`);
 * :mod:`particles.xpbd.solver`: :class:`XPBD` and :class:`PBD`, the substepped solvers, and
-  :func:`constraints_from_system`.
+  :func:`constraints_from_system`;
+* :mod:`particles.xpbd.stiffness`: PBD's stiffness corrected for the iteration count
+  (:func:`iteration_corrected`, ``PBD(..., corrected=True)``).
 """
 
 from .constraints import ConstraintSet
 from .solver import (PBD, XPBD, Attachment, Distance, IsometricBending, IsometricClamp, color_constraints,
                      constraints_from_system, distance_pass)
+from .stiffness import iteration_corrected
 
 __all__ = ["XPBD", "PBD", "Distance", "IsometricBending", "IsometricClamp", "Attachment", "color_constraints",
-           "constraints_from_system", "distance_pass", "ConstraintSet"]
+           "constraints_from_system", "distance_pass", "ConstraintSet", "iteration_corrected"]
