@@ -4,18 +4,24 @@ import sys
 
 
 def _warn(done, export, moodle_id):
-    """The problems of an export, on stderr; True when a record or a student was left out."""
+    """The problems of an export, on stderr; True when a record or a student was left out, or cannot be matched."""
+    from ..course.results.importers import moodle_left_out
+
     for student in done["name_only"]:
         print(f"warning: {student.submission_name} (roster line {student.line}) has no Canvas ID, SIS User ID or "
               "SIS Login ID: Canvas can match it only by name", file=sys.stderr)
+    for student in done.get("by_hand", []):
+        print(f"Canvas cannot match {student.submission_name} (roster line {student.line}): it lists the row as an "
+              "unknown student, to match by hand on upload; give it its canvas_id (see lms-report.csv)",
+              file=sys.stderr)
     for name, record in export.unmatched:
         print(f"not on the roster: {record.student} ({record.exercise}, {record.total:g}/{record.total_max:g} "
               f"points, records/{name}): not exported", file=sys.stderr)
     for fmt, students in done["left_out"].items():
         for student in students:
-            print(f"left out of the {fmt} file: {student.submission_name} (roster line {student.line}) has no "
-                  f"{moodle_id}", file=sys.stderr)
-    return bool(export.unmatched or any(done["left_out"].values()))
+            print(f"left out of the {fmt} file: {student.submission_name} (roster line {student.line}) "
+                  f"{moodle_left_out(student, moodle_id)}", file=sys.stderr)
+    return bool(export.unmatched or any(done["left_out"].values()) or done.get("by_hand"))
 
 
 def run(args):

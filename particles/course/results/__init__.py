@@ -17,5 +17,7 @@ Modules:
 * :mod:`~particles.course.results.rubric`: rubrics (CSV) of the written answers, checked and merged into
   the records (``particles grade --rubric``);
 * :mod:`~particles.course.results.lms`: ``particles export``: the grades as Canvas's and Moodle's
-  gradebook import CSVs, students matched through a roster.
+  gradebook import CSVs, students matched through a roster;
+* :mod:`~particles.course.results.importers`: how Canvas's and Moodle's importers read a file (PHP's
+  ``fgetcsv`` escapes, identifiers PHP calls empty, Canvas's number converter and matching order).
 """
