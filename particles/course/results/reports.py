@@ -44,9 +44,9 @@ def _records(results):
     return [r if isinstance(r, SubmissionRecord) else SubmissionRecord.from_dict(r) for r in results]
 
 
-MANUAL_OUTPUT = ("Written answer, graded by hand on Gradescope ({points} points): instructors, add a manual "
-                 "question for it in the assignment's outline")
-"""What Gradescope shows under a written question that no rubric graded here."""
+MANUAL_OUTPUT = "Written answer, graded by hand on Gradescope ({points} points)"
+"""What Gradescope shows under a written question that no rubric graded here (to add it as a manual question
+of the assignment's outline is the instructors' part: ``GRADESCOPE.md`` of the bundle says so)."""
 
 
 def _written_entry(exercise, k, top, entry, answered):
@@ -111,8 +111,8 @@ def gradescope_results(student, results, hidden_visibility="after_published", ma
     data["tests"] = tests + rest  # the top-level score is already the records' totals (written grades included)
     if any(r.written for r in results):
         data["extra_data"]["written"] = {r.exercise: r.written for r in results if r.written}
-        data["output"] = "\n".join([data["output"], *(f"{r.exercise}: {_written_summary(r)}" for r in results
-                                                      if r.written)]).strip()
+        data["output"] = "\n".join([data["output"], *(f"{r.exercise}: {_written_summary(r, hidden_visibility)}"
+                                                      for r in results if r.written)]).strip()
     return data
 
 
@@ -131,9 +131,12 @@ def _written_points(entry):
         f"not graded yet / {top}"
 
 
-def _written_summary(result):
-    return (f"Tests {_fmt(result.score)} / {_fmt(result.max_score)}; written answers, graded by people, "
-            f"{_fmt(result.written_score)} / {_fmt(result.written_max)}")
+def _written_summary(result, hidden_visibility="visible"):
+    """Tests and written answers in one line; on Gradescope (`hidden_visibility`) the visible tests only."""
+    score, top = result.visible_score(hidden_visibility)
+    hidden = score_of(result.tests) != (score, top)
+    return (f"Tests {_fmt(score)} / {_fmt(top)}{' (the tests you can see)' if hidden else ''}; written answers, "
+            f"graded by people, {_fmt(result.written_score)} / {_fmt(result.written_max)}")
 
 
 def _written_markdown(result):

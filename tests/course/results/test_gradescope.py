@@ -68,7 +68,7 @@ def test_run_autograder_grades_the_master(bundle, tmp_path):
     """run_autograder against a fake /autograder grades a correct notebook to full marks, hidden tests included."""
     root = _autograder_tree(bundle, tmp_path / "autograder", (ROOT / "solutions" / "00_warmup.ipynb").read_text())
     results = _run_autograder(root)
-    assert results["score"] == results["max_score"] == 11
+    assert results["score"] == results["extra_data"]["max_score"] == 11
     tests = [t for t in results["tests"] if not t["extra_data"].get("written")]
     assert len(tests) == 8 and {t["status"] for t in tests} == {"passed"}
     # the written question: 0 of 0 here, graded by hand on Gradescope for its 2 points
@@ -98,7 +98,7 @@ def test_run_autograder_survives_a_broken_submission(bundle, tmp_path):
         "id": 1, "created_at": "2026-10-04T08:00:00.365935-07:00",
         "users": [{"email": "student@example.com", "id": 1234, "name": "Student User"}]}))
     results = _run_autograder(root)
-    assert results["score"] == 0 and results["max_score"] == 11
+    assert results["score"] == 0 and results["extra_data"]["max_score"] == 11
     assert all("could not be read" in t["output"] for t in results["tests"] if not t["extra_data"].get("written"))
     late = results["extra_data"]["late"]["00_warmup"]
     assert (late["days_late"], late["penalty"]) == (2, 5.5) and late["source"] == "Gradescope's submission metadata"
@@ -122,6 +122,6 @@ def test_run_autograder_with_no_notebook(bundle, tmp_path):
     (root / "submission" / "my_warmup.ipynb").unlink()
     (root / "submission" / "notes.txt").write_text("I forgot the notebook")
     results = _run_autograder(root)
-    assert results["score"] == 0 and results["max_score"] == 11
+    assert results["score"] == 0 and results["extra_data"]["max_score"] == 11
     assert all("no notebook" in t["output"] for t in results["tests"] if not t["extra_data"].get("written"))
     assert [t["max_score"] for t in results["tests"] if t["extra_data"].get("written")] == [0]
