@@ -77,6 +77,9 @@ class Unit:
     origin : str
         Where it came from as the instructor named it (``export.zip:alice/00_warmup.ipynb``; "" when it is
         `notebook` itself).
+    handed_in : str
+        The notebook as the student handed it in: its path inside the zip or folder given (``alice/00_warmup.ipynb``),
+        or its name; what the student reads of it, with none of the instructor's folders.
     """
 
     student: str
@@ -84,6 +87,7 @@ class Unit:
     notebook: Path
     rejected: str = ""
     origin: str = ""
+    handed_in: str = ""
 
     @property
     def where(self):
@@ -221,12 +225,13 @@ def _candidates(given, problems, workdir, limits):
             problems.append(str(error))
             return []
         top = _unwrap(folder)
-        return [(nb, *_who(top, parts, ("zip", str(given))), f"{given}:{Path(*parts)}")
+        return [(nb, *_who(top, parts, ("zip", str(given))), f"{given}:{Path(*parts)}", Path(*parts).as_posix())
                 for nb, parts in _walk(top, problems)]
     if given.is_dir():
-        return [(nb, *_who(given, parts, ("folder", str(given))), "") for nb, parts in _walk(given, problems)]
+        return [(nb, *_who(given, parts, ("folder", str(given))), "", Path(*parts).as_posix())
+                for nb, parts in _walk(given, problems)]
     if given.exists() or given.is_symlink():
-        return [(given, _student_name(given.stem), ("file", str(given.resolve())), "")]
+        return [(given, _student_name(given.stem), ("file", str(given.resolve())), "", given.name)]
     problems.append(f"{given} does not exist")
     return []
 
@@ -276,7 +281,7 @@ def find_submissions(paths, exercises, exercise=None, *, workdir=None, limits=DE
     """
     problems, found, seen = [], [], set()
     for given in map(Path, paths):
-        for nb, student, source, origin in _candidates(given, problems, workdir, limits):
+        for nb, student, source, origin, handed_in in _candidates(given, problems, workdir, limits):
             key = (os.path.realpath(nb), _identity(student))
             if key in seen:  # the same file given twice: one submission
                 continue
@@ -296,7 +301,7 @@ def find_submissions(paths, exercises, exercise=None, *, workdir=None, limits=DE
                 continue
             if rejected:
                 problems.append(f"{where}: 0 points: {rejected}")
-            found.append((Unit(student, name, nb, rejected, origin), source))
+            found.append((Unit(student, name, nb, rejected, origin, handed_in), source))
     spelling = {}
     for unit, _ in sorted(found, key=lambda f: f[0].student):
         spelling.setdefault(_identity(unit.student), unit.student)
@@ -316,9 +321,10 @@ def find_submissions(paths, exercises, exercise=None, *, workdir=None, limits=DE
             units.append(picks[0])
             continue
         both = " and ".join(p.where for p in picks)
-        reason = (f"{len(picks)} notebooks from different places map to student {student} for {name} ({both}); "
-                  "none was graded: keep one and grade again")
-        problems.append(f"{student}: 0 points: {reason}")
+        yours = " and ".join(p.handed_in or Path(p.notebook).name for p in picks)  # without our folders
+        reason = f"{len(picks)} notebooks from different places are yours for {name} ({yours}); none was graded"
+        problems.append(f"{student}: 0 points: {len(picks)} notebooks from different places map to student "
+                        f"{student} for {name} ({both}); none was graded: keep one and grade again")
         units.append(Unit(student, name, picks[0].notebook, reason, both))
     return units, problems
 

@@ -14,6 +14,7 @@ Modules:
 * :mod:`~particles.course.results.review`: ``particles review``: one page per written question with every
   student's answer side by side, and the rubric to fill in;
 * :mod:`~particles.course.results.markup`: students' Markdown as safe HTML (no markup of theirs survives);
+* :mod:`~particles.course.results.shown`: what students read of a record: no folder of the instructor's;
 * :mod:`~particles.course.results.rubric`: rubrics (CSV) of the written answers, checked and merged into
   the records (``particles grade --rubric``);
 * :mod:`~particles.course.results.lms`: ``particles export``: the grades as Canvas's and Moodle's

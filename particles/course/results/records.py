@@ -26,6 +26,8 @@ import html
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from .shown import for_students
+
 __all__ = ["TestRecord", "SessionRecord", "SubmissionRecord", "score_of", "to_gradescope", "VISIBILITIES",
            "STRETCH_GOAL"]
 
@@ -154,8 +156,9 @@ class TestRecord(_Fields):
         return cls(**kwargs)
 
     def output(self):
-        """What the student reads under the test: "passed", or the reason (with the seed of hidden tests)."""
-        text = "passed" if self.passed else self.reason
+        """What the student reads under the test: "passed", or the reason (with the seed of hidden tests), no path
+        of the instructor's in it (:func:`~particles.course.results.shown.for_students`)."""
+        text = "passed" if self.passed else for_students(self.reason)
         if self.hidden and self.seed is not None:
             text += f" (random parameters, seed {self.seed})"
         return text
@@ -421,7 +424,7 @@ class SubmissionRecord(_HoldsTests):
         if hidden:
             line += " on the tests you can see; the hidden tests are shown when grades are published"
         lines = [line]
-        lines += [f"  {note}" for note in self.notes]
+        lines += [f"  {for_students(note)}" for note in self.notes]
         if self.sandbox:
             lines.append(f"  Sandbox of your code: {self.sandbox}")
         late = self.late_lines()
