@@ -19,6 +19,8 @@ Modules:
   the records (``particles grade --rubric``);
 * :mod:`~particles.course.results.lms`: ``particles export``: the grades as Canvas's and Moodle's
   gradebook import CSVs, students matched through a roster;
+* :mod:`~particles.course.results.returned`: ``particles export --canvas-feedback/--moodle-feedback``: the
+  feedback zips Canvas and Moodle read back as each student's feedback files;
 * :mod:`~particles.course.results.importers`: how Canvas's and Moodle's importers read a file (PHP's
   ``fgetcsv`` escapes, identifiers PHP calls empty, Canvas's number converter and matching order).
 """

@@ -244,3 +244,54 @@ def _to_i(text):
     """Ruby's String#to_i: leading white space, a sign and digits; 0 when there are none."""
     match = re.match(r"\s*([+-]?\d+)", text or "")
     return int(match.group(1)) if match else 0
+
+
+# --- Feedback zips ---------------------------------------------------------------------------------------------
+# instructure/canvas-lms, app/models/assignment.rb, Assignment#infer_comment_context_from_filename (as stored at
+# the version whose generate_comments_from_files groups the files by user):
+#     filename = File.basename(fullpath)
+#     split_filename = filename.split('_')
+#     user_id, attachment_id = split_filename.grep(/^\d+$/).take(2)
+#     attachment_id = nil if split_filename.last =~ /^link/ || filename =~ /^\._/
+#     ... ignored unless the attachment is one of that user's submission's attachments;
+#     the comment's file is shown under attachment.display_name (the name of the submitted file).
+def canvas_reupload(names):
+    """(user id, attachment id) Canvas reads from each file name of a re-upload zip, None when it ignores it."""
+    read = {}
+    for fullpath in names:
+        filename = fullpath.rsplit("/", 1)[-1]
+        parts = filename.split("_")
+        while parts and parts[-1] == "":  # Ruby's split drops trailing empty strings
+            parts.pop()
+        digits = [p for p in parts if re.fullmatch(r"\d+", p)][:2]
+        user = digits[0] if digits else None
+        attachment = digits[1] if len(digits) > 1 else None
+        if (parts and re.match(r"link", parts[-1])) or filename.startswith("._"):
+            attachment = None
+        read[fullpath] = (user, attachment) if user and attachment else None
+    return read
+
+
+# moodle/moodle, mod/assign/feedback/file/importziplib.php at commit 0203d8f26027201de1d7d1ec8d8aa3cdcc4f5d5d,
+# assignfeedback_file_zip_importer::is_valid_filename_for_import: directories and names starting with '.' or '~'
+# are skipped; each path part is exploded on '_' (limit 5); a part of at least 4 pieces whose second is numeric and
+# a participant, whose third and fourth name a plugin of the assignment (assignfeedback, file), gives the user and
+# the file name (the rest of the path).
+def moodle_feedback_import(names, participants, plugins=(("assignfeedback", "file"),)):
+    """participant id -> [file name] Moodle imports from a feedback zip's names (`participants`: ids)."""
+    found = {}
+    for name in names:
+        if name.endswith("/") or name.rsplit("/", 1)[-1].startswith((".", "~")):
+            continue
+        parts = name.split("/")
+        while parts:
+            info = parts.pop(0).split("_", 4)
+            if len(info) < 4 or not re.fullmatch(r"\s*[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?\s*", info[1]):
+                continue
+            participant = int(float(info[1]))
+            if participant not in participants or (info[2], info[3]) not in plugins:
+                continue
+            parts.insert(0, info[4] if len(info) > 4 else "")
+            found.setdefault(participant, []).append("/".join(parts))
+            break
+    return found

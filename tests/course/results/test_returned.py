@@ -1,0 +1,85 @@
+"""Feedback back to students (particles.course.results.returned): the zips as Canvas and Moodle read them back."""
+
+import json
+import zipfile
+
+import nbformat
+
+from particles.cli import main
+from particles.course.results.records import SubmissionRecord, TestRecord
+from particles.course.results.returned import canvas_ids, moodle_participant, write_feedback_zips
+from particles.course.results.store import RecordStore
+
+from .helpers import canvas_reupload, moodle_feedback_import
+
+SECRET = "/home/prof/course-2026"
+
+
+def _record(student, notebook, exercise="00_warmup"):
+    figure = {"title": "order", "xlabel": "h", "ylabel": "error", "loglog": True,
+              "series": [{"label": "yours", "x": [0.1, 0.01], "y": [0.1, 0.01]},
+                         {"label": "reference", "x": [0.1, 0.01], "y": [0.01, 0.0001]}]}
+    tests = [TestRecord("test_a", "a works", points=2.0, passed=True),
+             TestRecord("test_b", "b converges", points=1.0, reason=f"order 1 ({SECRET}/tests/test_00.py)",
+                        figures=[figure])]
+    return SubmissionRecord(student=student, exercise=exercise, notebook=notebook, tests=tests, complete=True,
+                            notes=[f"Not graded: see {SECRET}/subs/x.ipynb"])
+
+
+RECORDS = [_record("alee", f"{SECRET}/canvas.zip:alee_101_5551_00_warmup.ipynb"),
+           _record("bray", f"{SECRET}/subs/bray_LATE_102_5552_warmup.ipynb"),
+           _record("Ann_Lee_12", f"{SECRET}/moodle.zip:Ann Lee_12_assignsubmission_file_/00_warmup.ipynb"),
+           _record("Bo_Yu_13", f"{SECRET}/subs/Bo Yu_13_assignsubmission_file_/sub/00_warmup.ipynb"),
+           _record("cy", f"{SECRET}/subs/cy/00_warmup.ipynb")]
+
+
+def test_ids_of_the_lms_downloads_are_read_from_the_graded_notebook():
+    """Canvas's user and file ids, Moodle's full name and participant id, from the download's names."""
+    assert [canvas_ids(r.notebook) for r in RECORDS] == [("101", "5551"), ("102", "5552"), None, None, None]
+    assert [moodle_participant(r.notebook) for r in RECORDS] == [None, None, ("Ann Lee", "12"), ("Bo Yu", "13"),
+                                                                None]
+
+
+def test_canvas_reads_each_file_as_a_comment_on_its_students_submission(tmp_path):
+    """Canvas's rule gives each file's user and submitted file; the file is a notebook (Canvas shows it under the
+    student's own notebook's name) holding the feedback and its figure, with no path of the instructor's."""
+    done = write_feedback_zips(RECORDS, canvas=tmp_path / "canvas.zip")
+    with zipfile.ZipFile(done["files"]["canvas"]["00_warmup"]) as archive:
+        names = archive.namelist()
+        assert canvas_reupload(names) == {"feedback_101_5551_00_warmup.ipynb": ("101", "5551"),
+                                          "feedback_102_5552_00_warmup.ipynb": ("102", "5552")}
+        for name in names:
+            text = archive.read(name).decode()
+            notebook = nbformat.reads(text, as_version=4)
+            nbformat.validate(notebook)
+            assert "Feedback for" in notebook.cells[0].source and "order 1 (test_00.py)" in notebook.cells[0].source
+            assert "image/png" in json.dumps(notebook.cells[1]["attachments"]) and "attachment:" in notebook.cells[1].source
+            assert SECRET not in text and "feedback.html" not in text and "nstructor" not in text
+    assert [s for s, _, _ in done["left_out"]["canvas"]] == ["Ann_Lee_12", "Bo_Yu_13", "cy"]
+
+
+def test_moodle_reads_each_folder_as_its_participants_feedback_files(tmp_path):
+    """Moodle's rule gives each folder's participant and the feedback file; the page names no instructor path."""
+    done = write_feedback_zips(RECORDS, moodle=tmp_path / "moodle.zip")
+    with zipfile.ZipFile(done["files"]["moodle"]["00_warmup"]) as archive:
+        names = archive.namelist()
+        assert moodle_feedback_import(names, {12, 13, 14}) == {12: ["/feedback.html"], 13: ["/feedback.html"]}
+        assert names == ["Ann Lee_12_assignfeedback_file/feedback.html", "Bo Yu_13_assignfeedback_file/feedback.html"]
+        for name in names:
+            page = archive.read(name).decode()
+            assert "<h1>Feedback for " in page and "data:image/png;base64," in page and SECRET not in page
+    assert [s for s, _, _ in done["left_out"]["moodle"]] == ["alee", "bray", "cy"]
+
+
+def test_one_zip_per_exercise_and_the_command(tmp_path, capsys):
+    """Records of two exercises give a zip per exercise; the command says who was left out and exits 1."""
+    store = RecordStore(tmp_path / "out" / "records", {"public_only": False})
+    for record in [*RECORDS[:3], _record("alee", f"{SECRET}/c.zip:alee_101_7771_01_x.ipynb", "01_integrator_order")]:
+        store.save(record)
+    code = main(["export", str(tmp_path / "out"), "--canvas-feedback", str(tmp_path / "fb.zip")])
+    printed = capsys.readouterr()
+    assert code == 1 and "no canvas feedback for Ann_Lee_12 (00_warmup)" in printed.err
+    assert sorted(p.name for p in tmp_path.glob("fb-*.zip")) == ["fb-00_warmup.zip", "fb-01_integrator_order.zip"]
+    with zipfile.ZipFile(tmp_path / "fb-01_integrator_order.zip") as archive:
+        assert archive.namelist() == ["feedback_101_7771_01_integrator_order.ipynb"]
+    assert "fb-00_warmup.zip (canvas feedback for 00_warmup): 2 students" in printed.out
