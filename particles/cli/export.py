@@ -60,15 +60,17 @@ def _feedback(args):
     """Write the feedback zips; 1 when a student's feedback could not go in (said on stderr), 2 on no records."""
     from pathlib import Path
 
-    from ..course.results.lms import ExportError, read_records
+    from ..course.results.lms import ExportError, RosterError, read_records, read_roster
     from ..course.results.returned import write_feedback_zips
 
     try:
         records = read_records(Path(args.out) / "records")
-    except ExportError as error:
+        roster = read_roster(args.roster, args.name_column) if args.roster else None
+        done = write_feedback_zips(records.values(), canvas=args.canvas_feedback, moodle=args.moodle_feedback,
+                                   roster=roster, downloads=args.download or ())
+    except (ExportError, RosterError, ValueError) as error:
         print(f"particles export: {error}", file=sys.stderr)
         return 2
-    done = write_feedback_zips(records.values(), canvas=args.canvas_feedback, moodle=args.moodle_feedback)
     for fmt, files in done["files"].items():
         for exercise, path in files.items():
             count = sum(1 for _, e, _ in done["written"][fmt] if e == exercise)
@@ -99,6 +101,9 @@ def register(commands):
                         "Submissions\": each student's feedback, attached to their submission as a comment")
     export.add_argument("--moodle-feedback", metavar="ZIP", help="write the zip for Moodle's \"Upload multiple "
                         "feedback files in a zip\": each student's feedback.html")
+    export.add_argument("--download", action="append", metavar="ZIP", help="the LMS's submissions download "
+                        "(zip or folder; repeatable): the ids of students graded from another layout, found "
+                        "through the roster (Canvas: canvas_id, Moodle: name)")
     export.add_argument("--name-column", default="submission_name",
                         help="the roster's column of the names the grader files submissions under "
                              "(default submission_name)")

@@ -18,6 +18,12 @@
   participant id of the folders of Moodle's submissions download (``Full Name_123_assignsubmission_file_``); a
   student graded from another layout is left out and reported. The "Feedback files" feedback type must be on.
 
+Graded from another layout (a folder per login, say), a student's ids come from the LMS's submissions download
+itself (``--download FILE.zip``, as downloaded; a folder too), through the roster (``--roster``,
+:mod:`particles.course.results.lms`): Canvas's files whose user id is the student's ``canvas_id``, Moodle's
+folders whose full name is the student's ``name``; among several, the file with the graded notebook's bytes, else
+the one named for the exercise.
+
 What students read there is what :mod:`particles.course.results.reports` writes for them (no folder of the
 instructor's, :mod:`particles.course.results.shown`; nothing addressed to instructors).
 
@@ -27,16 +33,20 @@ instructor's, :mod:`particles.course.results.shown`; nothing addressed to instru
 
 import base64
 import json
+import os
 import re
+import tempfile
 import zipfile
 from pathlib import Path
 
 from ..grading import figures
-from ..grading.discovery import CANVAS
+from ..grading.discovery import CANVAS, notebook_digest, student_key
+from ..grading.intake import ZipRefused, extract_zip
 from .reports import feedback_html, feedback_markdown
 from .shown import submitted_name
 
-__all__ = ["MOODLE_FOLDER", "canvas_ids", "moodle_participant", "feedback_notebook", "write_feedback_zips"]
+__all__ = ["MOODLE_FOLDER", "canvas_ids", "moodle_participant", "feedback_notebook", "read_downloads",
+           "write_feedback_zips"]
 
 MOODLE_FOLDER = re.compile(r"^(?P<fullname>.+)_(?P<participant>\d+)_assign(?:submission|feedback)_[a-z]+_?$")
 """A folder of Moodle's submissions download: the student's full name and their participant id."""
@@ -59,6 +69,56 @@ def moodle_participant(notebook):
         if match:
             return match.group("fullname"), match.group("participant")
     return None
+
+
+def read_downloads(paths):
+    """The notebooks of LMS submissions downloads (zips, opened safely, or folders), with what their names say.
+
+    Returns
+    -------
+    list of dict
+        One per notebook: ``name`` (its path in the download), ``sha256``, ``canvas`` ((user, file) or None),
+        ``moodle`` ((full name, participant) or None).
+
+    Raises
+    ------
+    ValueError
+        A download that does not exist or a zip that is refused (naming it).
+    """
+    found = []
+    with tempfile.TemporaryDirectory(prefix="particles-download-") as work:
+        for k, given in enumerate(map(Path, paths)):
+            if given.is_file() and given.suffix.lower() == ".zip":
+                top = Path(work) / f"zip{k:03d}"
+                try:
+                    extract_zip(given, top)
+                except ZipRefused as error:
+                    raise ValueError(f"download {given}: {error}") from None
+            elif given.is_dir():
+                top = given
+            else:
+                raise ValueError(f"download {given}: no such zip or folder (expected the LMS's submissions download)")
+            for folder, _, files in os.walk(top):  # links to folders are not followed
+                for name in sorted(f for f in files if f.lower().endswith(".ipynb")):
+                    path = Path(folder) / name
+                    inside = path.relative_to(top).as_posix()
+                    found.append({"name": inside, "sha256": notebook_digest(path), "canvas": canvas_ids(inside),
+                                  "moodle": moodle_participant(inside)})
+    return found
+
+
+def _from_download(fmt, record, student, entries):
+    """The ids of `record` found in the downloads' `entries` through its roster `student`, else None."""
+    if student is None:
+        return None
+    if fmt == "canvas":
+        mine = [e for e in entries if e["canvas"] and student.canvas_id and e["canvas"][0] == student.canvas_id]
+    else:
+        name = student_key(student.name) if student.name else None
+        mine = [e for e in entries if e["moodle"] and name and student_key(e["moodle"][0]) == name]
+    pick = ([e for e in mine if e["sha256"] == record.notebook_sha256 != ""]
+            or [e for e in mine if record.exercise in e["name"]] or (mine if len(mine) == 1 else []))
+    return pick[0][fmt] if pick else None
 
 
 def feedback_notebook(record):
@@ -88,7 +148,7 @@ def _path(given, exercise, several):
     return given.with_name(f"{given.stem}-{exercise}{given.suffix}") if several else given
 
 
-def write_feedback_zips(records, canvas=None, moodle=None):
+def write_feedback_zips(records, canvas=None, moodle=None, roster=None, downloads=()):
     """Write Canvas's and Moodle's feedback zips of `records`, one per exercise.
 
     Parameters
@@ -97,6 +157,11 @@ def write_feedback_zips(records, canvas=None, moodle=None):
         The graded records (:func:`particles.course.results.lms.read_records`).
     canvas, moodle : path or None
         The zips to write (``name-<exercise>.zip`` beside them when the records hold several exercises).
+    roster : Roster, optional
+        The roster (:func:`particles.course.results.lms.read_roster`): with `downloads`, where the ids of a
+        student graded from another layout are found.
+    downloads : sequence of path
+        The LMS's submissions downloads (zips or folders, :func:`read_downloads`).
 
     Returns
     -------
@@ -106,6 +171,8 @@ def write_feedback_zips(records, canvas=None, moodle=None):
     """
     records = sorted(records, key=lambda r: (r.exercise, r.student))
     exercises = sorted({r.exercise for r in records})
+    entries = read_downloads(downloads) if downloads else []
+    students = {s.key: s for s in roster.students} if roster is not None else {}
     done = {"files": {}, "written": {}, "left_out": {}}
     for fmt, given in (("canvas", canvas), ("moodle", moodle)):
         if given is None:
@@ -116,7 +183,8 @@ def write_feedback_zips(records, canvas=None, moodle=None):
             path.parent.mkdir(parents=True, exist_ok=True)
             with zipfile.ZipFile(path, "w") as archive:
                 for record in (r for r in records if r.exercise == exercise):
-                    placed = _place(fmt, record)
+                    placed = _place(fmt, record, _from_download(fmt, record, students.get(student_key(record.student)),
+                                                                entries))
                     if isinstance(placed, str):
                         done["left_out"][fmt].append((record.student, exercise, placed))
                         continue
@@ -127,20 +195,26 @@ def write_feedback_zips(records, canvas=None, moodle=None):
     return done
 
 
-def _place(fmt, record):
-    """(name in the zip, bytes) of a record's feedback for `fmt`, or why it cannot be returned there."""
+def _place(fmt, record, downloaded=None):
+    """(name in the zip, bytes) of a record's feedback for `fmt`, or why it cannot be returned there.
+
+    `downloaded`: the ids found for it in the LMS's download (:func:`_from_download`), used when its own
+    notebook's name does not carry them.
+    """
     where = submitted_name(record.notebook) or "(no notebook)"
     if fmt == "canvas":
-        ids = canvas_ids(record.notebook)
+        ids = canvas_ids(record.notebook) or downloaded
         if ids is None:
             return (f"its notebook {where} is not named as in Canvas's submissions download "
-                    "(login_userid_fileid_name.ipynb): Canvas could not tell whose submission it is")
+                    "(login_userid_fileid_name.ipynb), and no file of the download given is theirs (by the "
+                    "roster's canvas_id): Canvas could not tell whose submission it is")
         notebook = json.dumps(feedback_notebook(record), indent=1, ensure_ascii=False)
         return f"feedback_{ids[0]}_{ids[1]}_{record.exercise}.ipynb", notebook.encode()
-    found = moodle_participant(record.notebook)
+    found = moodle_participant(record.notebook) or downloaded
     if found is None:
         return (f"its notebook {where} is not in a folder of Moodle's submissions download "
-                "(Full Name_123_assignsubmission_file_): Moodle could not tell whose it is")
+                "(Full Name_123_assignsubmission_file_), and no folder of the download given is theirs (by the "
+                "roster's name): Moodle could not tell whose it is")
     fullname = re.sub(r"[_/\\]+", " ", found[0]).strip() or "student"
     html = feedback_html(record.student, [record])
     return f"{fullname}_{found[1]}_assignfeedback_file/feedback.html", html.encode()

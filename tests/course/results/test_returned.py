@@ -83,3 +83,37 @@ def test_one_zip_per_exercise_and_the_command(tmp_path, capsys):
     with zipfile.ZipFile(tmp_path / "fb-01_integrator_order.zip") as archive:
         assert archive.namelist() == ["feedback_101_7771_01_integrator_order.ipynb"]
     assert "fb-00_warmup.zip (canvas feedback for 00_warmup): 2 students" in printed.out
+
+
+def test_ids_from_the_lms_download_through_the_roster(tmp_path, capsys):
+    """Students graded from their own folders get their feedback back through the LMS's download and the roster:
+    Canvas's file by canvas_id (the one with the graded bytes), Moodle's folder by name."""
+    from particles.course.results.lms import read_roster
+    subs = tmp_path / "subs"
+    store = RecordStore(tmp_path / "out" / "records", {"public_only": False})
+    for student in ("ann", "bo"):
+        (subs / student).mkdir(parents=True)
+        (subs / student / "00_warmup.ipynb").write_text(f'{{"who": "{student}"}}')
+        record = _record(student, str(subs / student / "00_warmup.ipynb"))
+        record.notebook_sha256 = __import__("hashlib").sha256(f'{{"who": "{student}"}}'.encode()).hexdigest()
+        store.save(record)
+    roster = tmp_path / "roster.csv"
+    roster.write_text("submission_name,name,canvas_id\nann,Ann Lee,101\nbo,Bo Yu,102\n")
+    with zipfile.ZipFile(tmp_path / "canvas-download.zip", "w") as archive:
+        archive.writestr("leeann_101_9001_00_warmup.ipynb", '{"who": "someone else"}')
+        archive.writestr("leeann_101_9002_00_warmup.ipynb", '{"who": "ann"}')
+        archive.writestr("yubo_LATE_102_9003_notebook.ipynb", '{"who": "bo"}')
+    moodle = tmp_path / "moodle-download"
+    (moodle / "Ann Lee_31_assignsubmission_file_").mkdir(parents=True)
+    (moodle / "Ann Lee_31_assignsubmission_file_" / "00_warmup.ipynb").write_text("{}")
+    code = main(["export", str(tmp_path / "out"), "--roster", str(roster), "--canvas-feedback", str(tmp_path / "c.zip"),
+                 "--moodle-feedback", str(tmp_path / "m.zip"), "--download", str(tmp_path / "canvas-download.zip"),
+                 "--download", str(moodle)])
+    assert code == 1 and "no moodle feedback for bo (00_warmup)" in capsys.readouterr().err  # no folder of Bo Yu
+    with zipfile.ZipFile(tmp_path / "c.zip") as archive:
+        assert canvas_reupload(archive.namelist()) == {"feedback_101_9002_00_warmup.ipynb": ("101", "9002"),
+                                                       "feedback_102_9003_00_warmup.ipynb": ("102", "9003")}
+    with zipfile.ZipFile(tmp_path / "m.zip") as archive:
+        assert moodle_feedback_import(archive.namelist(), {31}) == {31: ["/feedback.html"]}
+    read = read_roster(roster)
+    assert write_feedback_zips([], canvas=tmp_path / "x.zip", roster=read)["written"] == {"canvas": []}
