@@ -43,7 +43,7 @@ from ..grading import figures
 from ..grading.discovery import CANVAS, notebook_digest, student_key
 from ..grading.intake import ZipRefused, extract_zip
 from .reports import feedback_html, feedback_markdown
-from .shown import submitted_name
+from .shown import posix as _posix, submitted_name
 
 __all__ = ["MOODLE_FOLDER", "canvas_ids", "moodle_participant", "feedback_notebook", "read_downloads",
            "write_feedback_zips"]
@@ -63,7 +63,7 @@ def canvas_ids(notebook):
 
 def moodle_participant(notebook):
     """(full name, participant id) of a notebook graded from Moodle's submissions download, else None."""
-    tail = str(notebook).replace("\\", "/").rsplit(".zip:", 1)[-1]
+    tail = _posix(notebook).rsplit(".zip:", 1)[-1]
     for part in reversed(tail.split("/")[:-1]):
         match = MOODLE_FOLDER.match(part)
         if match:

@@ -7,9 +7,8 @@ Gradescope's output and the LMS feedback: those show only the last part of each 
 """
 
 import re
-from pathlib import PureWindowsPath
 
-__all__ = ["for_students", "submitted_name"]
+__all__ = ["for_students", "submitted_name", "posix"]
 
 # an absolute path: "/" (not inside a word, a URL or a relative path), folders, then the last part
 _POSIX = re.compile(r"(?<![\w.~:/\\-])/(?:[^\s/:`'\"()\[\]<>|,;]+/)+([^\s/`'\"()\[\]<>|,;]*)")
@@ -30,8 +29,14 @@ def for_students(text):
     return _WINDOWS.sub(lambda m: m.group(1), text)
 
 
+def posix(path):
+    """A record's path with ``/`` between its parts: a Windows path's ``\\`` turned to ``/`` (a POSIX path, which
+    holds a ``/``, keeps its backslashes: they may be part of a name)."""
+    text = str(path)
+    return text if "/" in text or not re.match(r"^([A-Za-z]:)?\\", text) else text.replace("\\", "/")
+
+
 def submitted_name(notebook):
     """The graded notebook's own name: the last part of a record's ``notebook`` (a path, or ``zip:member``)."""
-    tail = str(notebook).replace("\\", "/").rsplit(".zip:", 1)[-1]
-    name = tail.rstrip("/").rsplit("/", 1)[-1]
-    return PureWindowsPath(name).name or name
+    tail = posix(notebook).rsplit(".zip:", 1)[-1]
+    return tail.rstrip("/").rsplit("/", 1)[-1]

@@ -54,7 +54,7 @@ def test_canvas_reads_each_file_as_a_comment_on_its_students_submission(tmp_path
             nbformat.validate(notebook)
             assert "Feedback for" in notebook.cells[0].source and "order 1 (test_00.py)" in notebook.cells[0].source
             assert "image/png" in json.dumps(notebook.cells[1]["attachments"]) and "attachment:" in notebook.cells[1].source
-            assert SECRET not in text and "feedback.html" not in text and "nstructor" not in text
+            assert SECRET not in text and "feedback.html" not in text and "instructors," not in text
     assert [s for s, _, _ in done["left_out"]["canvas"]] == ["Ann_Lee_12", "Bo_Yu_13", "cy"]
 
 
