@@ -240,7 +240,7 @@ def write_review(paths, out, *, root=None, exercise=None):
     Parameters
     ----------
     paths : sequence of path
-        Notebooks or folders of them, as for ``particles grade``.
+        Notebooks, folders of them or zips (an LMS's download), as for ``particles grade``.
     out : path
         The folder to write: ``index.html``, ``<exercise>/question-<k>.html``, ``<exercise>/rubric.csv``.
     root : path, optional
@@ -264,8 +264,13 @@ def write_review(paths, out, *, root=None, exercise=None):
     tests = exercise_tests(root)
     if exercise is not None and exercise not in tests:
         raise ValueError(f"unknown exercise {exercise!r}; expected one of {', '.join(map(repr, tests))}")
-    units, problems = find_submissions(paths, list(tests), exercise)
-    out = Path(out)
+    with tempfile.TemporaryDirectory(prefix="particles-review-") as work:  # zips opened as grade opens them
+        return _write_review(paths, Path(out), root, tests, exercise, work)
+
+
+def _write_review(paths, out, root, tests, exercise, work):
+    """:func:`write_review` with `work`, the private folder zips are opened into."""
+    units, problems = find_submissions(paths, list(tests), exercise, workdir=work)
     pages, rubrics, index, kept = [], [], [], 0
     for name in [n for n in tests if any(u.exercise == n for u in units)]:
         released = released_exercise(root, name)

@@ -14,7 +14,9 @@ grade (a number in ``[0, max_points]``, empty: not graded yet) and
 ``comment`` what the student reads under it. Blank lines are skipped.
 
 ``particles grade ... --rubric FILE`` (repeatable; a folder stands for every
-``*.csv`` file under it) checks every row first and refuses the whole run
+``*.csv`` file under it, read per exercise: the rows of the course's exercises
+that the run does not grade are left for the run that grades them, as
+``particles review`` writes one rubric per exercise) checks every row first and refuses the whole run
 (exit status 2, before anything is graded) on: an unknown exercise, student
 or question, points that are not a number or fall outside
 ``[0, max_points]``, a ``max_points`` that disagrees with the master, a row
@@ -40,6 +42,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..grading.discovery import released_exercise
+from ..paths import exercise_tests
 from ..release.answers import question_points
 
 __all__ = ["COLUMNS", "NO_ANSWER", "RubricError", "Grade", "rubric_files", "exercise_questions",
@@ -139,8 +142,12 @@ def _version(path):
     return f"{path} sha256:{hashlib.sha256(path.read_bytes()).hexdigest()[:16]}"
 
 
-def _read(path, questions, students, seen, problems):
-    """The checked :class:`Grade` s of one file; what is wrong goes to `problems` (``seen``: rows so far)."""
+def _read(path, questions, students, seen, problems, others=()):
+    """The checked :class:`Grade` s of one file; what is wrong goes to `problems` (``seen``: rows so far).
+
+    Rows of the exercises `others` (of the course, not graded in this run) are skipped: a folder of rubrics is
+    read per exercise.
+    """
     try:
         text = path.read_bytes().decode("utf-8-sig")
     except (OSError, UnicodeDecodeError) as error:
@@ -170,6 +177,8 @@ def _read(path, questions, students, seen, problems):
             continue
         cell = {name: value.strip() for name, value in zip(header, row)}
         exercise, student = cell["exercise"], cell["student"]
+        if exercise in others and exercise not in questions:
+            continue
         if exercise not in questions:
             problems.append(f"{where}: unknown exercise {exercise!r}; expected one of "
                             f"{', '.join(sorted(questions)) or '(none graded here)'}")
@@ -257,8 +266,11 @@ class WrittenGrades:
         for unit in units:
             students.setdefault(unit.exercise, set()).add(unit.student)
         grades, problems, seen, versions = [], [], {}, {}
+        named = {Path(p).resolve() for p in paths or () if Path(p).is_file()}
+        course = set(exercise_tests(root))  # a folder's rubrics of the course's other exercises: not this run's
         for path in rubric_files(paths or ()):
-            found = _read(path, questions, students, seen, problems)
+            others = () if path.resolve() in named else course
+            found = _read(path, questions, students, seen, problems, others)
             grades += found
             for g in found:
                 versions.setdefault(g.exercise, [])

@@ -192,3 +192,31 @@ def test_a_notebook_the_grader_refuses_is_shown_blank_with_the_graders_reason(tm
     assert "ada" not in problems
     page = (tmp_path / "review" / EXERCISE / "question-1.html").read_text()
     assert "Order one." in page
+
+
+def test_review_opens_an_lms_zip_and_exits_1_on_a_problem(tmp_path, capsys):
+    """An LMS's zip is opened as `particles grade` opens it; a notebook not read makes the command exit 1."""
+    import zipfile
+    with zipfile.ZipFile(tmp_path / "download.zip", "w") as archive:
+        archive.writestr(f"ada/{EXERCISE}.ipynb", json.dumps(_submission({1: "Order one."})))
+        archive.writestr(f"bob/{EXERCISE}.ipynb", '{"cells": [')
+    code = main(["review", str(tmp_path / "download.zip"), "--out", str(tmp_path / "r"), "--root", str(ROOT)])
+    printed = capsys.readouterr()
+    assert code == 1 and "unzip it first" not in printed.err and "not valid JSON" in printed.err
+    assert "Order one." in (tmp_path / "r" / EXERCISE / "question-1.html").read_text()
+    rows = list(csv.DictReader((tmp_path / "r" / EXERCISE / "rubric.csv").open()))
+    assert {r["student"] for r in rows} == {"ada", "bob"}
+
+
+def test_a_rubric_folder_is_read_per_exercise(reviewed, tmp_path):
+    """A folder of rubrics of two exercises merges into a run of one: the other exercise's rows wait for theirs;
+    a file named on its own still must fit the run."""
+    subs, review, _ = reviewed
+    other = review / "00_warmup" / "rubric.csv"
+    other.parent.mkdir()
+    other.write_text(",".join(COLUMNS) + "\n00_warmup,zed,1,2,1,ok\n")
+    units, _ = find_submissions([subs], [EXERCISE])
+    written = WrittenGrades.load([review], units, ROOT)
+    assert written.covers(EXERCISE) and not written.covers("00_warmup")
+    with pytest.raises(ValueError, match="unknown exercise '00_warmup'"):
+        WrittenGrades.load([other], units, ROOT)
