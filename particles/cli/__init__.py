@@ -14,7 +14,7 @@ Modules:
 * ``grade.py``: ``particles grade``, the autograder;
 * ``review.py``: ``particles review``, the written answers' pages and rubrics;
 * ``new_exercise.py``: ``particles new-exercise``, a template master and test module;
-* ``export.py``: ``particles export``, the grades for Canvas and Moodle;
+* ``export.py``: ``particles export``, the grades and the feedback zips for Canvas and Moodle;
 * ``gradescope_bundle.py``: ``particles gradescope-bundle``, the Gradescope autograder zip;
 * ``similarity.py``: ``particles similarity``, submitted functions equal to others.
 

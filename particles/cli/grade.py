@@ -37,6 +37,16 @@ def print_table(summary):
         print(f"{student:<24}{cells}{f'{total[0]:g}/{total[1]:g}':>12}")
 
 
+def _ungraded(summary):
+    """Say the written answers a rubric names but does not grade yet (they count 0 until it does)."""
+    left = [(r.student, r.exercise, w["question"]) for results in summary["students"].values() for r in results
+            for w in r.written if w.get("points") is None]
+    if left:
+        shown = ", ".join(f"{s} {e} question {q}" for s, e, q in sorted(left)[:10])
+        print(f"rubric: {len(left)} written answer(s) not graded yet, counted 0 until they are: {shown}"
+              + (", ..." if len(left) > 10 else ""), file=sys.stderr)
+
+
 def report(args, summary):
     """What the run did, and its exit status: 1 when nothing was graded or a notebook was scored unseen."""
     print(f"sandbox: {summary['isolation']}")
@@ -49,6 +59,8 @@ def report(args, summary):
         print(f"not graded: {problem}", file=sys.stderr)
     if summary["students"]:
         print_table(summary)
+    if args.rubric:
+        _ungraded(summary)
     if args.out:
         print(f"\ngradebook of the term: {Path(args.out) / 'gradebook.csv'}; per student: results.json, feedback.md "
               f"and feedback.html; the record: {Path(args.out) / 'course.sqlite'}")

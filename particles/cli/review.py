@@ -27,7 +27,7 @@ def run(args):
     if summary["kept"]:
         print(f"kept {summary['kept']} graded row(s) already in the rubrics")
     print(f"then: particles grade ... --rubric {args.out}")
-    return 0
+    return 1 if summary["problems"] else 0
 
 
 def register(commands):
@@ -36,8 +36,10 @@ def register(commands):
         "fill in", description="For each exercise and written question, write DIR/<exercise>/question-<k>.html "
         "(every student's answer side by side, with the figures it refers to; self-contained, no scripts) and "
         "DIR/<exercise>/rubric.csv (points and comments to fill in; rows already filled are kept), then grade "
-        "with `particles grade ... --rubric DIR`.")
-    review.add_argument("submissions", nargs="+", metavar="SUBMISSION", help="a notebook or a folder of them")
+        "with `particles grade ... --rubric DIR`. Exit status 0; 1 when a notebook was not read or an exercise has "
+        "no written question (said on stderr); 2 on bad arguments.")
+    review.add_argument("submissions", nargs="+", metavar="SUBMISSION", help="a notebook, a folder of them, or a "
+                        "zip (an LMS's submissions download), as for particles grade")
     review.add_argument("--out", required=True, metavar="DIR", help="the folder to write the pages and rubrics to")
     review.add_argument("--exercise", help="read every notebook as this exercise (as `particles grade` does)")
     review.add_argument("--roster", metavar="FILE", help="who is in the course (default: the course file's roster): "

@@ -4,8 +4,9 @@ Release the student bundle; twenty students hand in exercise 00 (on time, late, 
 extension, very late, missing, one student from two places, malformed notebooks, a wrong answer, a
 stub, a classmate not on the roster); autograde with the course file's deadline; write the review
 pages; fill in the rubric; merge it without running a test again; regrade one student who handed in
-again; export Canvas's and Moodle's files from a roster. Every student's total is explained in their
-feedback: tests + written answers - late penalty, each part shown.
+again; export Canvas's and Moodle's files from a roster (read back by a port of Canvas's importer and by
+PHP's fgetcsv, as Moodle reads them) and both LMSs' feedback zips. Every student's total is explained in
+their feedback: tests + written answers - late penalty, each part shown.
 """
 
 import csv
@@ -16,11 +17,14 @@ from pathlib import Path
 
 import pytest
 
+from particles.cli import main
 from particles.course.grading.driver import grade
 from particles.course.release.notebooks import write_bundle
 from particles.course.results import lms
 from particles.course.results.review import write_review
 from particles.course.results.rubric import COLUMNS
+
+from .results.helpers import CanvasUser, canvas_import, canvas_reupload, moodle_feedback_import, moodle_import
 
 ROOT = Path(__file__).resolve().parents[2]
 EXERCISE = "00_warmup"
@@ -88,6 +92,17 @@ def _hand_in(tmp_path):
     return subs
 
 
+def _current(out):
+    """(student, exercise) -> current record, from the course record of `out`."""
+    from particles.course.term.database import TermRecord
+
+    term = TermRecord(out)
+    try:
+        return term.current()
+    finally:
+        term.close()
+
+
 def _fill(rubric):
     """The grader's rubric: full points for an answer, 0 and "no answer" for a blank one."""
     with open(rubric, newline="") as handle:
@@ -148,11 +163,10 @@ def test_a_whole_term(tmp_path):
 
     # dee hands in her finished notebook (the instructor allows it): only she is graded again
     (subs / "dee" / f"{EXERCISE}.ipynb").write_text(json.dumps(_notebooks()[0]))
-    kept = {p.name: p.read_bytes() for p in (out / "records").glob("*.json") if not p.name.startswith("dee__")}
+    kept = {k: r.to_dict() for k, r in _current(out).items() if k[0] != "dee"}
     again = grade([subs], out, rubric=[rubric], students=["dee"], **options)
     assert list(again["students"]) == ["dee"] and again["students"]["dee"][0].score > 0
-    assert {p.name: p.read_bytes() for p in (out / "records").glob("*.json") if not p.name.startswith("dee__")} \
-        == kept
+    assert {k: r.to_dict() for k, r in _current(out).items() if k[0] != "dee"} == kept
 
     # every student's total is explained: tests + written - penalty, and the gradebook agrees
     with open(out / "gradebook.csv", newline="") as handle:
@@ -168,30 +182,74 @@ def test_a_whole_term(tmp_path):
     penalty = _explained((out / "eli" / "feedback.md").read_text())[3]
     assert penalty == pytest.approx(0.3 * merged["students"]["eli"][0].total_max)  # 30% of tests and written
 
-    # the LMS: a roster of the twenty; fox is missing, zed is reported, never dropped
+    # the LMS: a roster of the twenty; fox is missing, zed is reported, never dropped; pam's id number is 0 (empty
+    # to PHP) and oli's name holds \" (PHP's escape)
+    names = {student: f"{student.capitalize()} Student" for student in TERM}
+    names["oli"] = 'Oli \\", jr'
+    ids = {student: "0" if student == "pam" else f"{2000 + k}" for k, student in enumerate(TERM)}
     roster = tmp_path / "roster.csv"
     with open(roster, "w", newline="") as handle:
         writer = csv.writer(handle)
-        writer.writerow(["submission_name", "name", "canvas_id", "sis_user_id", "sis_login_id", "section", "email"])
+        writer.writerow(["submission_name", "name", "canvas_id", "sis_user_id", "sis_login_id", "section", "email",
+                         "idnumber"])
         for k, student in enumerate(TERM):
-            writer.writerow([student, f"{student.capitalize()} Student", 1000 + k, f"S{k:03d}", student, "A",
-                             f"{student}@example.edu"])
-    done = lms.export_grades(out, roster, canvas=tmp_path / "canvas.csv", moodle=tmp_path / "moodle.csv")
-    assert [record.student for _, record in done["export"].unmatched] == [NOT_ON_ROSTER]
-    with open(tmp_path / "canvas.csv", newline="", encoding="utf-8") as handle:
-        canvas = list(csv.reader(handle))
-    assert canvas[0] == [*lms.CANVAS_STUDENT_COLUMNS, EXERCISE, lms.CANVAS_TOTAL]
-    assert canvas[1][0] == lms.CANVAS_POINTS_ROW and len(canvas) == 2 + len(TERM)
-    rows = {row[3]: row for row in canvas[2:]}
-    assert float(rows["fox"][5]) == 0 and float(rows["ann"][5]) == pytest.approx(float(book["ann"][EXERCISE]))
-    assert float(rows["ben"][5]) < float(rows["ann"][5])
-    with open(tmp_path / "moodle.csv", newline="", encoding="utf-8") as handle:
-        moodle = list(csv.DictReader(handle))
-    assert list(moodle[0]) == [lms.MOODLE_IDENTIFIERS["email"], lms.MOODLE_NAME, EXERCISE, f"{EXERCISE} feedback",
-                               lms.MOODLE_TOTAL]
-    fox = next(row for row in moodle if row["Email address"] == "fox@example.edu")
-    assert float(fox[EXERCISE]) == 0 and fox[f"{EXERCISE} feedback"] == lms.MOODLE_MISSING
-    assert len(moodle) == len(TERM)
+            writer.writerow([student, names[student], 1000 + k, f"S{k:03d}", student, "A", f"{student}@example.edu",
+                             ids[student]])
+    downloads = _lms_downloads(tmp_path, subs, names)
+    code = main(["export", str(out), "--roster", str(roster), "--canvas", str(tmp_path / "canvas.csv"),
+                 "--moodle", str(tmp_path / "moodle.csv"), "--moodle-id", "idnumber",
+                 "--canvas-feedback", str(tmp_path / "canvas-feedback.zip"),
+                 "--moodle-feedback", str(tmp_path / "moodle-feedback.zip"), *downloads])
+    assert code == 1  # zed is not on the roster, pam cannot be in the Moodle file
+    report = list(csv.DictReader((out / "lms-report.csv").open(encoding="utf-8")))
+    assert {(r["problem"], r["student"]) for r in report} == {("not on roster", NOT_ON_ROSTER), ("missing", "fox"),
+                                                              ("left out", "pam")}
+
+    # Canvas's importer (ported) matches every row with its student, each with the gradebook's total
+    users = [CanvasUser(1000 + k, names[s], "", f"S{k:03d}", s) for k, s in enumerate(TERM)]
+    canvas = canvas_import((tmp_path / "canvas.csv").read_text(encoding="utf-8"), users)
+    assert canvas.assignments == [EXERCISE] and [user.id for user, _ in canvas.rows] == [u.id for u in users]
+    for (user, grades), student in zip(canvas.rows, TERM):
+        expected = float(book[spelled[student]][EXERCISE]) if student != "fox" else 0.0
+        assert float(grades[EXERCISE]) == pytest.approx(expected), student
+
+    # Moodle's reading (PHP's fgetcsv): one row per student, each with its own id number; pam left out
+    moodle = moodle_import(tmp_path / "moodle.csv")
+    assert moodle["error"] is None
+    assert moodle["header"] == [lms.MOODLE_IDENTIFIERS["idnumber"], lms.MOODLE_NAME, EXERCISE,
+                                f"{EXERCISE} feedback", lms.MOODLE_TOTAL]
+    assert moodle["users"] == [row[0] for row in moodle["rows"]] == [ids[s] for s in TERM if s != "pam"]
+    rows = {row[0]: row for row in moodle["rows"]}
+    assert rows[ids["oli"]][1] == names["oli"] and rows[ids["fox"]][3] == lms.MOODLE_MISSING
+    assert float(rows[ids["ben"]][2]) == pytest.approx(float(book["ben"][EXERCISE]))
+
+    # the feedback back: every graded student on the roster gets a file Canvas and Moodle attach to them
+    graded_roster = [s for s in TERM if s != "fox"]
+    with zipfile.ZipFile(tmp_path / "canvas-feedback.zip") as archive:
+        read = canvas_reupload(archive.namelist())
+        assert sorted(read.values()) == sorted((str(1000 + k), str(5000 + k)) for k, s in enumerate(TERM)
+                                               if s != "fox")
+        texts = [archive.read(name).decode() for name in archive.namelist()]
+    with zipfile.ZipFile(tmp_path / "moodle-feedback.zip") as archive:
+        read = moodle_feedback_import(archive.namelist(), {3000 + k for k in range(len(TERM))})
+        assert sorted(read) == [3000 + k for k, s in enumerate(TERM) if s != "fox"]
+        texts += [archive.read(name).decode() for name in archive.namelist()]
+    assert len(texts) == 2 * len(graded_roster)
+    advice = re.compile(r"grade again|manual question|instructors,| --[a-z]")  # what is said to instructors
+    assert not [t for t in texts if str(tmp_path) in t or advice.search(t)]
+
+
+def _lms_downloads(tmp_path, subs, names):
+    """The LMSs' submissions downloads of the term's notebooks: Canvas's zip, Moodle's folder (as --download)."""
+    canvas, moodle = tmp_path / "canvas-submissions.zip", tmp_path / "moodle-submissions"
+    with zipfile.ZipFile(canvas, "w") as archive:
+        for k, student in enumerate(TERM):
+            for notebook in sorted((subs / student).glob("*.ipynb")) if (subs / student).is_dir() else []:
+                archive.writestr(f"{student}_{1000 + k}_{5000 + k}_{notebook.name}", notebook.read_bytes())
+                folder = moodle / f"{names[student]}_{3000 + k}_assignsubmission_file_"
+                folder.mkdir(parents=True)
+                (folder / notebook.name).write_bytes(notebook.read_bytes())
+    return ["--download", str(canvas), "--download", str(moodle)]
 
 
 # -- a term of two exercises from two LMSs, into one course record ---------------------------------------------

@@ -15,7 +15,7 @@ The course file is TOML, ``course.toml`` at the course root or given with
     deadline = 2026-10-01T23:59:00+01:00   # ISO 8601 with a time zone (a TOML date-time or a string)
 
     [exercises.01_integrator_order]
-    deadline = "2026-10-15T23:59:00+01:00"
+    deadline = "2026-10-29T23:59 Europe/Berlin"  # a local time and a named zone: CET or CEST, as that day has it
     penalty_per_day = 0.2                  # this exercise's own policy
 
     [extensions.alice]                     # per student: a new deadline, or extra days
@@ -28,7 +28,17 @@ The penalty is a fraction of the exercise's points (the record's
 [0, 1]. The grace period only forgives: a submission after the grace period counts its days late
 from the deadline itself. An exercise the file does not name has no deadline (its records'
 ``late`` is None). Every key is checked: an unknown exercise or key, a deadline without a time
-zone, a negative penalty, a cap outside [0, 1] are errors naming the key.
+zone, a negative penalty, a cap outside [0, 1] are errors naming the key, all of a file's errors
+at once.
+
+A time (a deadline, an extension's new deadline, a submission time) is a TOML date-time with an
+offset (``2026-10-01T23:59:00+01:00``, ``Z`` for UTC), or a string: ISO 8601 with an offset, or a
+local date and time followed by a named zone of the IANA database (``"2026-10-29T23:59
+Europe/Berlin"``, also ``"2026-10-29T23:59[Europe/Berlin]"``), whose offset is the one that zone
+has on that day, daylight saving included (Python's ``zoneinfo``: the system's zone database, or
+the ``tzdata`` package where the system has none). A local time that does not exist in the zone
+(the hour skipped when clocks go forward) or happens twice (when they go back) is an error: write
+it with its offset.
 
 The time of a submission is never guessed (:mod:`particles.course.grading.times` says where it comes from).
 
@@ -39,10 +49,12 @@ course file may name the roster: ``roster = "roster.csv"`` (relative to the cour
 """
 
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field
-from datetime import date, datetime, time, timedelta
+from datetime import date, datetime, time, timedelta, timezone
 from pathlib import Path
+from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
 from .discovery import Unit
 
@@ -54,6 +66,27 @@ COURSE_FILE = "course.toml"
 
 _POLICY_KEYS = ("penalty_per_day", "cap", "grace_minutes")
 _DAY = timedelta(days=1)
+_NAMED = re.compile(r"^(?P<when>\d{4}-\d\d-\d\d[T ]\d\d:\d\d(?::\d\d(?:\.\d+)?)?)"
+                    r"(?:\s+(?P<zone>[A-Za-z][\w+-]*(?:/[\w+-]+)*)|\[(?P<bracket>[^\]]+)\])$")
+
+
+def _in_zone(when, name, key):
+    """A local date and time `when` (ISO 8601, no offset) in the IANA zone `name`, checked to exist once."""
+    try:
+        zone = ZoneInfo(name)
+    except (ZoneInfoNotFoundError, ValueError):
+        raise ValueError(f"{key}: unknown time zone {name!r}; expected a name of the IANA time zone database "
+                         "such as Europe/Berlin or America/New_York, or an offset (+01:00)") from None
+    local = datetime.fromisoformat(when)
+    first, second = local.replace(tzinfo=zone, fold=0), local.replace(tzinfo=zone, fold=1)
+    exists = [a for a in (first, second) if a.astimezone(timezone.utc).astimezone(zone).replace(tzinfo=None) == local]
+    if not exists:
+        raise ValueError(f"{key}: {when} does not exist in {name} (the clocks go forward over it); write the "
+                         "time with its offset")
+    if first.utcoffset() != second.utcoffset():
+        raise ValueError(f"{key}: {when} happens twice in {name} (the clocks go back over it); write it with its "
+                         f"offset ({first.isoformat()} or {second.isoformat()})")
+    return first
 
 
 def parse_time(value, key):
@@ -62,20 +95,35 @@ def parse_time(value, key):
     Parameters
     ----------
     value : datetime or str
+        A date-time with an offset, or a string: ISO 8601 with an offset, or a local date and time and a named
+        zone (``"2026-10-29T23:59 Europe/Berlin"`` or ``"2026-10-29T23:59[Europe/Berlin]"``, see the module's
+        notes).
     key : str
         Where the value was given, for the error (``exercises.00_warmup.deadline``).
 
     Raises
     ------
     ValueError
-        When `value` is not a date-time, or has no time zone (naming `key`).
+        When `value` is not a date-time, has no time zone, names an unknown zone, or a local time that does not
+        exist or happens twice in its zone (naming `key`).
+
+    Examples
+    --------
+    >>> parse_time("2026-07-01T23:59 Europe/Berlin", "deadline").isoformat()
+    '2026-07-01T23:59:00+02:00'
+    >>> parse_time("2026-11-01T23:59[Europe/Berlin]", "deadline").isoformat()
+    '2026-11-01T23:59:00+01:00'
     """
     if isinstance(value, str):
+        named = _NAMED.match(value.strip())
+        if named:
+            return _in_zone(named.group("when"), named.group("zone") or named.group("bracket").strip(), key)
         try:
             value = datetime.fromisoformat(value.strip())
         except ValueError:
             raise ValueError(f"{key}: {value!r} is not an ISO 8601 date-time "
-                             "(expected e.g. 2026-10-01T23:59:00+01:00)") from None
+                             "(expected e.g. 2026-10-01T23:59:00+01:00 or \"2026-10-01T23:59 Europe/Berlin\")") \
+                from None
     if isinstance(value, date) and not isinstance(value, datetime) or isinstance(value, time):
         raise ValueError(f"{key}: {value.isoformat()} is not a date and a time with a time zone "
                          "(expected e.g. 2026-10-01T23:59:00+01:00)")
@@ -83,7 +131,7 @@ def parse_time(value, key):
         raise ValueError(f"{key}: expected a date-time with a time zone, got {type(value).__name__} {value!r}")
     if value.tzinfo is None or value.utcoffset() is None:
         raise ValueError(f"{key}: {value.isoformat()} has no time zone; write it with one "
-                         f"(e.g. {value.isoformat()}+01:00, or Z for UTC)")
+                         f"(e.g. {value.isoformat()}+01:00, Z for UTC, or \"{value.isoformat()} Europe/Berlin\")")
     return value
 
 
@@ -110,17 +158,21 @@ class LatePolicy:
         """The policy of a TOML table (keys of :data:`_POLICY_KEYS`), defaults from `base`."""
         base = base or cls()
         values = {name: getattr(base, name) for name in _POLICY_KEYS}
+        problems = []
         for name in _POLICY_KEYS:
             if name not in table:
                 continue
             value = table[name]
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise ValueError(f"{key}.{name}: expected a number, got {value!r}")
-            if value < 0:
-                raise ValueError(f"{key}.{name}: must be >= 0, got {value!r}")
-            if name == "cap" and value > 1:
-                raise ValueError(f"{key}.cap: a fraction of the exercise's points, in [0, 1], got {value!r}")
-            values[name] = float(value)
+                problems.append(f"{key}.{name}: expected a number, got {value!r}")
+            elif value < 0:
+                problems.append(f"{key}.{name}: must be >= 0, got {value!r}")
+            elif name == "cap" and value > 1:
+                problems.append(f"{key}.cap: a fraction of the exercise's points, in [0, 1], got {value!r}")
+            else:
+                values[name] = float(value)
+        if problems:
+            raise ValueError("\n".join(problems))
         return cls(**values)
 
 
@@ -194,7 +246,10 @@ def load_course(path, exercises):
     try:
         return _course(data, list(exercises), str(path))
     except ValueError as error:
-        raise ValueError(f"{path}: {error}") from None
+        problems = str(error).splitlines()
+        if len(problems) == 1:
+            raise ValueError(f"{path}: {error}") from None
+        raise ValueError(f"{path}: {len(problems)} problems:\n  " + "\n  ".join(problems)) from None
 
 
 def _table(data, key):
@@ -205,56 +260,74 @@ def _table(data, key):
 
 
 def _course(data, exercises, path=""):
-    unknown = sorted(set(data) - {"late", "exercises", "extensions", "roster"})
-    if unknown:
-        raise ValueError(f"unknown key {unknown[0]!r}; expected roster, late, exercises or extensions")
-    known = ", ".join(exercises)
+    """The :class:`Course` of a course file's TOML data; every problem at once (a ValueError, one per line)."""
+    problems = []
 
-    def check_exercise(name, key):
-        if name not in exercises:
-            raise ValueError(f"{key}: unknown exercise {name!r}; expected one of {known}")
+    def attempt(check, *args, default=None):
+        try:
+            return check(*args)
+        except ValueError as error:
+            problems.extend(str(error).splitlines())
+            return default
 
-    late = _table(data, "late")
-    extra = sorted(set(late) - set(_POLICY_KEYS))
-    if extra:
-        raise ValueError(f"late.{extra[0]}: unknown key; expected {', '.join(_POLICY_KEYS)}")
-    base = LatePolicy.from_table(late, "late")
+    problems += [f"unknown key {k!r}; expected roster, late, exercises or extensions"
+                 for k in sorted(set(data) - {"roster", "late", "exercises", "extensions"})]
+    late = attempt(_table, data, "late", default={})
+    problems += [f"late.{k}: unknown key; expected {', '.join(_POLICY_KEYS)}"
+                 for k in sorted(set(late) - set(_POLICY_KEYS))]
+    base = attempt(LatePolicy.from_table, late, "late", default=LatePolicy())
     course = Course(path=path)
     if "roster" in data:
         if not isinstance(data["roster"], str) or not data["roster"].strip():
-            raise ValueError(f"roster: expected the roster file's path (a string), got {data['roster']!r}")
-        course.roster = Path(path).parent / data["roster"] if path else Path(data["roster"])
-    for name, table in _table(data, "exercises").items():
+            problems.append(f"roster: expected the roster file's path (a string), got {data['roster']!r}")
+        else:
+            course.roster = Path(path).parent / data["roster"] if path else Path(data["roster"])
+    for name, table in attempt(_table, data, "exercises", default={}).items():
         key = f"exercises.{name}"
-        check_exercise(name, key)
+        if name not in exercises:
+            problems.append(f"{key}: unknown exercise {name!r}; expected one of {', '.join(exercises)}")
+            continue
         if not isinstance(table, dict):
-            raise ValueError(f"{key}: expected a table ([{key}]) with a deadline, got {table!r}")
-        extra = sorted(set(table) - {"deadline", *_POLICY_KEYS})
-        if extra:
-            raise ValueError(f"{key}.{extra[0]}: unknown key; expected deadline, {', '.join(_POLICY_KEYS)}")
+            problems.append(f"{key}: expected a table ([{key}]) with a deadline, got {table!r}")
+            continue
+        problems += [f"{key}.{k}: unknown key; expected deadline, {', '.join(_POLICY_KEYS)}"
+                     for k in sorted(set(table) - {"deadline", *_POLICY_KEYS})]
         if "deadline" not in table:
-            raise ValueError(f"{key}: no deadline (add deadline = 2026-10-01T23:59:00+01:00, or remove the table)")
-        course.deadlines[name] = parse_time(table["deadline"], f"{key}.deadline")
-        course.policies[name] = LatePolicy.from_table(table, key, base)
-    for student, table in _table(data, "extensions").items():
+            problems.append(f"{key}: no deadline (add deadline = 2026-10-01T23:59:00+01:00, or remove the table)")
+            continue
+        deadline = attempt(parse_time, table["deadline"], f"{key}.deadline")
+        policy = attempt(LatePolicy.from_table, table, key, base)
+        if deadline is not None and policy is not None:
+            course.deadlines[name], course.policies[name] = deadline, policy
+    for student, table in attempt(_table, data, "extensions", default={}).items():
         key = f"extensions.{student}"
         if not isinstance(table, dict):
-            raise ValueError(f"{key}: expected a table of exercise = new deadline or extra days, got {table!r}")
+            problems.append(f"{key}: expected a table of exercise = new deadline or extra days, got {table!r}")
+            continue
         course.extensions[student] = {}
         for name, value in table.items():
-            check_exercise(name, f"{key}.{name}")
-            if name not in course.deadlines:
-                raise ValueError(f"{key}.{name}: an extension of an exercise without a deadline "
-                                 f"(add [exercises.{name}] with its deadline)")
-            if isinstance(value, bool) or not isinstance(value, (int, float, str, datetime, date, time)):
-                raise ValueError(f"{key}.{name}: expected a new deadline or a number of extra days, got {value!r}")
-            if isinstance(value, (int, float)):
-                if not math.isfinite(value) or value < 0:
-                    raise ValueError(f"{key}.{name}: extra days must be a number >= 0, got {value!r}")
-                course.extensions[student][name] = float(value)
-            else:
-                course.extensions[student][name] = parse_time(value, f"{key}.{name}")
+            given = attempt(_extension, name, value, f"{key}.{name}", exercises, course)
+            if given is not None:
+                course.extensions[student][name] = given
+    if problems:
+        raise ValueError("\n".join(problems))
     return course
+
+
+def _extension(name, value, key, exercises, course):
+    """One extension of a course file: a new deadline (aware datetime) or extra days (float), checked."""
+    if name not in exercises:
+        raise ValueError(f"{key}: unknown exercise {name!r}; expected one of {', '.join(exercises)}")
+    if name not in course.deadlines:
+        raise ValueError(f"{key}: an extension of an exercise without a deadline "
+                         f"(add [exercises.{name}] with its deadline)")
+    if isinstance(value, bool) or not isinstance(value, (int, float, str, datetime, date, time)):
+        raise ValueError(f"{key}: expected a new deadline or a number of extra days, got {value!r}")
+    if isinstance(value, (int, float)):
+        if not math.isfinite(value) or value < 0:
+            raise ValueError(f"{key}: extra days must be a number >= 0, got {value!r}")
+        return float(value)
+    return parse_time(value, key)
 
 
 def find_course(root, exercises, path=None):

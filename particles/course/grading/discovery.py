@@ -100,6 +100,9 @@ class Unit:
     place : tuple
         The place it came from (a folder, a Canvas user's files in one download, a Gradescope submission):
         one student's notebooks of one exercise from two places are a conflict.
+    handed_in : str
+        The notebook as the student handed it in: its path inside the zip or folder given (``alice/00_warmup.ipynb``),
+        or its name; what the student reads of it, with none of the instructor's folders.
     """
 
     student: str
@@ -113,6 +116,7 @@ class Unit:
     late_flag: bool = False
     on_roster: bool = True
     place: tuple = ()
+    handed_in: str = ""
     _digest: str = field(default=None, init=False, repr=False, compare=False)
 
     @property
@@ -269,6 +273,7 @@ class _Found:
     submitted: datetime = None
     time_source: str = ""
     late_flag: bool = False
+    handed_in: str = ""
 
 
 def _candidates(given, problems, workdir, limits):
@@ -289,13 +294,19 @@ def _candidates(given, problems, workdir, limits):
     if given.is_dir():
         return [_who(nb, given, parts, ("folder", str(given)), "") for nb, parts in _walk(given, problems)]
     if given.exists() or given.is_symlink():
-        return [_Found(given, [(given.stem, ())], ("file", str(given.resolve())))]
+        return [_Found(given, [(given.stem, ())], ("file", str(given.resolve())), handed_in=given.name)]
     problems.append(f"{given} does not exist")
     return []
 
 
 def _who(notebook, root, parts, place, origin):
     """Who the notebook at `parts` under `root` names, and the place it came from."""
+    found = _named(notebook, root, parts, place, origin)
+    found.handed_in = Path(*parts).as_posix()
+    return found
+
+
+def _named(notebook, root, parts, place, origin):
     if len(parts) > 1:
         folder = parts[0]
         match = MOODLE.match(folder)
@@ -379,7 +390,7 @@ def _read(candidate, exercises, exercise, problems, limits):
     if rejected:
         problems.append(f"{where}: 0 points: {rejected}")
     return Unit("", name, nb, rejected, origin, submitted=candidate.submitted, time_source=candidate.time_source,
-                late_flag=candidate.late_flag, place=candidate.source)
+                late_flag=candidate.late_flag, place=candidate.source, handed_in=candidate.handed_in)
 
 
 def _admitted(unit, name, aliases, identity, problems):
@@ -412,9 +423,10 @@ def _one_per_student(units, problems):
             out.append(picks[0])
             continue
         both = " and ".join(p.where for p in picks)
-        reason = (f"{len(picks)} notebooks from different places map to student {student} for {name} ({both}); "
-                  "none was graded: keep one and grade again")
-        problems.append(f"{student}: 0 points: {reason}")
+        yours = " and ".join(p.handed_in or Path(p.notebook).name for p in picks)  # without our folders
+        reason = f"{len(picks)} notebooks from different places are yours for {name} ({yours}); none was graded"
+        problems.append(f"{student}: 0 points: {len(picks)} notebooks from different places map to student "
+                        f"{student} for {name} ({both}); none was graded: keep one and grade again")
         out.append(Unit(student, name, picks[0].notebook, reason, both, aliases=picks[0].aliases))
     return out
 

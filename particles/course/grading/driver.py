@@ -290,8 +290,8 @@ def grade(paths, out=None, *, progress=None, runner=None, recorder=None, **optio
     out : path, optional
         Output folder: ``gradebook.csv``, ``<student>/results.json``,
         ``<student>/feedback.md`` and ``<student>/feedback.html`` (with the
-        tests' figures), ``records/`` (one record per notebook, written as soon
-        as it is graded) and ``logs/``. Nothing is written without it.
+        tests' figures), ``course.sqlite`` (the term's record: every result, kept as
+        soon as it is made) and ``logs/``. Nothing is written without it.
     progress : callable, optional
         Called with each per-exercise result as it completes.
     runner, recorder : optional

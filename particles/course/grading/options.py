@@ -36,8 +36,8 @@ class GradeOptions:
         :mod:`particles.course.grading.discovery`).
     out : path, optional
         Output folder: ``gradebook.csv``, ``<student>/results.json``, ``<student>/feedback.md`` and
-        ``<student>/feedback.html``, ``records/`` (one record per notebook, written as soon as it is
-        graded) and ``logs/``. Nothing is written without it.
+        ``<student>/feedback.html``, ``course.sqlite`` (the term's record, every result kept as soon as it
+        is made) and ``logs/``. Nothing is written without it.
     jobs : int
         Notebooks graded at the same time (each takes one core).
     exercise : str, optional
@@ -136,11 +136,11 @@ class GradeOptions:
         if isinstance(self.jobs, bool) or not isinstance(self.jobs, int) or self.jobs < 1:
             raise ValueError(f"jobs must be a positive integer, got {self.jobs!r}")
         if self.resume and self.out is None:
-            raise ValueError("resume needs out: the folder whose records/ an earlier run wrote")
+            raise ValueError("resume needs out: the folder whose course record an earlier run wrote")
         if self.students is not None:
             fix("students", tuple(dict.fromkeys(self.students)))
             if self.out is None or self.resume:
-                raise ValueError("student needs out (the folder whose records/ an earlier run wrote) and no resume")
+                raise ValueError("student needs out (the folder whose course record an earlier run wrote) and no resume")
         if self.hidden_visibility not in VISIBILITIES:
             raise ValueError(f"hidden_visibility must be one of {', '.join(VISIBILITIES)}, "
                              f"got {self.hidden_visibility!r}")

@@ -9,8 +9,9 @@ from pathlib import Path
 
 from ..results.records import SubmissionRecord, TestRecord
 from ..results.reports import gradescope_results, write_gradebook, write_json, write_outputs
+from ..results.shown import for_students
 from ..walls import isolation as isolation_module
-from .session import catalog
+from .session import NOT_RUN, catalog
 
 __all__ = ["progress_report", "statuses", "write_partial_gradebook", "summarize", "write_reports", "write_gradescope",
            "LIBRARY_CHANGED"]
@@ -137,11 +138,15 @@ def write_gradescope(options, results, problems, walls, written, changed):
         why = "no notebook for this exercise was found in your submission" if not problems else problems[0]
         tests = catalog(options.root, options.exercise, options.public_only, options.python)
         results = [SubmissionRecord(student="submission", exercise=options.exercise, sandbox=walls,
-                                    tests=[TestRecord.from_dict(t).failed(why) for t in tests])]
+                                    notes=[f"Not graded: {why}"],
+                                    tests=[TestRecord.from_dict(t).failed(NOT_RUN) for t in tests])]
+        problems = problems[1:]
     written.apply(results)
     data = gradescope_results("submission", results, options.hidden_visibility, manual=written.manual())
+    said = {note.removeprefix("Not graded: ") for r in results for note in r.notes}
+    problems = [p for p in problems if p.split(": 0 points: ", 1)[-1] not in said]  # each reason once
     if problems:
-        data["output"] = "\n".join([data["output"], *problems]).strip()
+        data["output"] = "\n".join([data["output"], *map(for_students, problems)]).strip()
     if changed:
         data = {"score": 0, "output": "The autograder's own files changed while grading this submission; "
                 "it was not graded. Please tell the instructors.", "tests": [], "visibility": "visible"}

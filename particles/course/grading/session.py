@@ -175,11 +175,16 @@ def _result(unit, seed, data, status, tests, seconds, trouble=None, root=None, v
         tests_version=version)
 
 
+NOT_RUN = "not run: your notebook was not graded (why: in the notes of this exercise)"
+"""The reason of each test of a notebook that was not graded: the reason itself is said once, in the notes."""
+
+
 def rejected_record(unit, tests):
-    """The record of a unit discovery rejected: every test of `tests` failed with its reason; never resumed."""
+    """The record of a unit discovery rejected: every test of `tests` failed, not run; its reason once, in the
+    notes; never resumed."""
     return SubmissionRecord(
         student=unit.student, exercise=unit.exercise, notebook=unit.where, seconds=0.0,
-        tests=[TestRecord.from_dict(t).failed(unit.rejected) for t in tests],
+        tests=[TestRecord.from_dict(t).failed(NOT_RUN) for t in tests],
         notes=[f"Not graded: {unit.rejected}"], grader_status=None, complete=True,
         sandbox="not run: the notebook was not graded")
 

@@ -35,7 +35,8 @@ from pathlib import Path
 
 import nbformat
 
-__all__ = ["lecture_notebooks", "execute_notebook", "notebook_summary", "build_site", "mathjax_source"]
+__all__ = ["lecture_notebooks", "execute_notebook", "notebook_summary", "build_site", "mathjax_source",
+           "copy_mathjax"]
 
 MATHJAX = "mathjax/tex-svg-full.js"  # the site's copy, relative to its pages
 
@@ -206,8 +207,9 @@ def mathjax_source():
     return folder
 
 
-def _copy_mathjax(out):
-    """Copy MathJax into ``out/mathjax``: the one bundle the pages load and what it loads lazily."""
+def copy_mathjax(out):
+    """Copy MathJax into ``out/mathjax``: the one bundle the pages load and what it loads lazily (also the review
+    pages' math, :mod:`particles.course.results.review`)."""
     source = mathjax_source()
 
     def others(folder, names):  # the other bundles at the top level, which no page loads
@@ -279,7 +281,7 @@ def build_site(out="site", lectures="lectures", executed=None, timeout=600, log=
         notebooks.append(nb)
         pages.append((path.with_suffix(".html").name, title, summary))
     written = [out / "index.html"]
-    _copy_mathjax(out)
+    copy_mathjax(out)
     for k, nb in enumerate(notebooks):
         if "widgets" in nb.metadata:  # a widget's saved state: no use without a kernel
             nb = copy.deepcopy(nb)

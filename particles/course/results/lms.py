@@ -1,7 +1,8 @@
-"""Grades into the LMS: the gradebook import CSVs of Canvas and Moodle, students matched through a roster.
+r"""Grades into the LMS: the gradebook import CSVs of Canvas and Moodle, students matched through a roster.
 
-``particles export OUT --roster ROSTER --canvas FILE --moodle FILE`` reads the records of a graded folder
-(``OUT/records/``, :mod:`particles.course.results.store`) and writes one row per student of the roster, one
+``particles export OUT --roster ROSTER --canvas FILE --moodle FILE`` reads the term's current records from the
+course record of a graded folder (``OUT/course.sqlite``, :mod:`particles.course.term.database`) and writes one
+row per student of the roster, one
 column per exercise (the record's :attr:`~particles.course.results.records.SubmissionRecord.total`: tests,
 written answers graded by people, minus the late penalty) and a total column.
 
@@ -12,7 +13,15 @@ documented there): the export has one row per roster student, matched to their r
 **Canvas** (`Canvas's guide`_, `Canvas's importer`_). Columns: ``Student, ID, SIS User ID, SIS Login ID,
 Section``, one column per exercise titled with the exercise's name, then ``Final Points`` (the total). The second
 line is ``Points Possible``: each exercise's points, ``(read only)`` under the total. Canvas matches a student by
-``ID``, else ``SIS User ID``, else ``SIS Login ID``, else by name; ``Section`` is not used. A column is an existing
+``ID``, else ``SIS User ID``, else ``SIS Login ID``, else by name, exactly (its ``name`` or ``sortable_name``);
+``Section`` is not used. Canvas's reader also rewrites every cell that looks like a number with a decimal comma
+(``1,5`` becomes ``1.5``), so an identifier such as ``12,345`` cannot match. :func:`~particles.course.results.importers.canvas_match` says how Canvas
+will find each roster student in the file: a student it can find only by name is reported as ``matched by name``,
+one it cannot find at all (no identifier, and no name as Canvas knows it: a name that starts with ``=``, ``+``,
+``-`` or ``@`` is written with a leading ``'``, so ``-Eve`` reads as ``'-Eve``) as ``match by hand`` (Canvas lists
+the row as an unknown student, to be matched by hand on upload), and the command exits with status 1: give such a
+student their ``canvas_id`` (Canvas's numeric user ID, the ``ID`` column of its gradebook export), the one identifier
+Canvas's importer always tries first. A column is an existing
 assignment when its title is the assignment's (or ends with ``(assignment id)``), else Canvas offers to create a
 new assignment of that title with the points of the ``Points Possible`` line: name the assignments after the
 exercises (``01_integrator_order``) or let the import create them. Columns whose title holds ``Current Score``,
@@ -20,27 +29,35 @@ exercises (``01_integrator_order``) or let the import create them. Columns whose
 ``Override Grade`` or ``Override Status`` are read-only for the importer: the total is ``Final Points`` so that it
 is shown and never imported as an assignment (an exercise named so is refused). Canvas has no column for a
 comment (a ``Notes`` column is imported only where the course made one), so a missing submission is a 0 there and
-"missing" in the report. UTF-8, comma-separated, no byte-order mark.
+"missing" in the report; the feedback goes back as files (:mod:`particles.course.results.returned`). UTF-8,
+comma-separated, no byte-order mark; cells with commas, quotes or line breaks are quoted (RFC 4180).
 
 **Moodle** (`Moodle's guide`_, `Moodle's importer`_). Columns: the identifier (``Email address``, ``Username`` or
 ``ID number``: ``--moodle-id``), ``Full name``, then for each exercise its grade (titled with the exercise's name)
 and ``<exercise> feedback`` (how the grade was made, or ``missing: no graded submission``), then ``Total``. On
 upload choose encoding UTF-8 and separator comma (the defaults; a byte-order mark would be removed, none is
 written), map from the identifier column to ``useremail``/``username``/``useridnumber``, map each exercise to its
-grade item (or "new grade item"), each feedback column to "feedback for" that item (Moodle's note: import a
-feedback with its grade) and leave ``Full name`` and ``Total`` on "ignore" (Moodle sums its own total; a grade
-above ``gradepointmax``, 100 by default, fails the import). Moodle aborts the whole import at a row whose user it
-cannot find, and a row with an empty identifier takes the previous row's user: a roster student without the chosen
-identifier is left out of the file and reported.
+grade item (or "new grade item") and leave ``Full name`` and ``Total`` on "ignore" (Moodle sums its own total; a
+grade above ``gradepointmax``, 100 by default, fails the import). Moodle offers a feedback column only for a grade
+item that already exists ("feedback for" that item): when the exercises' grade items are new, import the grades
+once with the feedback columns on "ignore", then import the file again, mapping each feedback column to its item.
 
-In both files a number is written with a dot and at most 6 decimals, without exponent or trailing zeros
+Moodle reads the file with PHP's ``fgetcsv``, whose escape character is the backslash: inside a quoted cell ``\"``
+does not end the cell, and a quote after a backslash is not doubled. The cells are written for that reader
+(:func:`~particles.course.results.importers.moodle_cell`), so that ``Gus\", jr`` stays one cell, and a cell ending in a backslash gets a trailing
+space, which Moodle trims from every cell. Moodle aborts the whole import at a row whose user it cannot find,
+and skips the user look-up for an identifier PHP's ``empty()`` calls empty (``""``, and ``"0"``, after trimming
+white space), so that such a row's grades go to the previous row's user: a roster student whose identifier is
+empty to PHP, or holds a line break, is left out of the file and reported (pick another ``--moodle-id``).
+
+Both files: a number is written with a dot and at most 6 decimals, without exponent or trailing zeros
 (``2.5``, ``10``, ``0.00001``), and a text cell starting with ``=``, ``+``, ``-``, ``@``, a tab or a carriage
-return (a spreadsheet formula) gets a leading ``'`` (`OWASP`_); cells with commas, quotes or line breaks are quoted
-(RFC 4180).
+return (a spreadsheet formula) gets a leading ``'`` (`OWASP`_).
 
 Nothing is dropped: a record whose student is on no line of the roster, a roster student without a record of an
-exercise (exported as 0) and a student left out of a file are all listed in ``OUT/lms-report.csv`` (columns
-:data:`REPORT_COLUMNS`), and the command exits with status 1 when a grade did not reach a file.
+exercise (exported as 0), a student left out of a file and a student Canvas cannot match are all listed in
+``OUT/lms-report.csv`` (columns :data:`REPORT_COLUMNS`), and the command exits with status 1 when a grade did not
+reach a file or will not reach its student.
 
 .. _Canvas's guide: https://community.canvaslms.com/t5/Instructor-Guide/How-do-I-import-grades-in-the-Gradebook/ta-p/807
 .. _Canvas's importer: https://github.com/instructure/canvas-lms/blob/master/lib/gradebook_importer.rb
@@ -56,6 +73,7 @@ from pathlib import Path
 
 from ..term.database import DATABASE, TermRecord
 from ..term.roster import CANVAS_POINTS_ROW, FORMULA, NAME_COLUMN, read_roster
+from .importers import canvas_match, canvas_unmatched, moodle_cell, moodle_left_out
 
 __all__ = ["CANVAS_DOC", "CANVAS_IMPORTER", "MOODLE_DOC", "MOODLE_IMPORTER", "CANVAS_STUDENT_COLUMNS",
            "CANVAS_TOTAL", "CANVAS_POINTS_ROW", "CANVAS_READ_ONLY", "CANVAS_RESERVED", "MOODLE_IDENTIFIERS",
@@ -84,7 +102,7 @@ MOODLE_MISSING = "missing: no graded submission"
 
 REPORT_COLUMNS = ("problem", "student", "exercise", "points", "detail")
 """The columns of ``lms-report.csv``; ``problem`` is one of ``not on roster``, ``not graded yet``, ``missing``,
-``left out``, ``matched by name``."""
+``left out``, ``matched by name``, ``match by hand``."""
 
 
 
@@ -243,6 +261,7 @@ def moodle_rows(export, identifier="email"):
     -------
     rows : list of list of str
     left_out : list of RosterStudent
+        Students without a usable `identifier` (:func:`~particles.course.results.importers.moodle_left_out` says why).
     """
     if identifier not in MOODLE_IDENTIFIERS:
         raise ValueError(f"identifier must be one of {', '.join(MOODLE_IDENTIFIERS)}, got {identifier!r}")
@@ -251,7 +270,7 @@ def moodle_rows(export, identifier="email"):
         header += [lms_text(e), lms_text(f"{e} feedback")]
     rows, left_out = [header + [MOODLE_TOTAL]], []
     for s in export.students:
-        if not getattr(s, identifier):
+        if moodle_left_out(s, identifier):
             left_out.append(s)
             continue
         row = [getattr(s, identifier), lms_text(s.display_name)]
@@ -262,9 +281,13 @@ def moodle_rows(export, identifier="email"):
     return rows, left_out
 
 
-def _write(path, rows):
+def _write(path, rows, cell=None):
+    """Write CSV rows: RFC 4180 (Python's writer), or each cell through `cell` (:func:`~particles.course.results.importers.moodle_cell`)."""
     with open(path, "w", encoding="utf-8", newline="") as handle:
-        csv.writer(handle).writerows(rows)
+        if cell is None:
+            csv.writer(handle).writerows(rows)
+        else:
+            handle.writelines(",".join(map(cell, row)) + "\n" for row in rows)
 
 
 def _report_rows(export, problems):
@@ -289,7 +312,7 @@ def export_grades(out, roster, canvas=None, moodle=None, name_column=NAME_COLUMN
     Parameters
     ----------
     out : path
-        The output folder of ``particles grade --out OUT``: its ``records/`` are read, ``lms-report.csv`` written.
+        The output folder of ``particles grade --out OUT``: its course record is read, ``lms-report.csv`` written.
     roster : path
         The roster CSV (:func:`read_roster`).
     canvas, moodle : path or None
@@ -303,7 +326,8 @@ def export_grades(out, roster, canvas=None, moodle=None, name_column=NAME_COLUMN
     -------
     dict
         ``export`` (:class:`Export`), ``files`` (format -> path), ``left_out`` (format -> list of RosterStudent),
-        ``name_only`` (roster students Canvas can match only by name), ``report`` (its path).
+        ``name_only`` (roster students Canvas can match only by name), ``by_hand`` (roster students Canvas cannot
+        match: :func:`~particles.course.results.importers.canvas_match`), ``report`` (its path).
 
     Raises
     ------
@@ -327,16 +351,21 @@ def export_grades(out, roster, canvas=None, moodle=None, name_column=NAME_COLUMN
         rows["canvas"] = canvas_rows(export)
     if "moodle" in targets:
         rows["moodle"], left_out["moodle"] = moodle_rows(export, moodle_id)
-        problems += [("left out", s, f"roster line {s.line} has no {moodle_id}: not in the Moodle file")
+        problems += [("left out", s, f"roster line {s.line} {moodle_left_out(s, moodle_id)}: not in the Moodle file")
                      for s in left_out["moodle"]]
-    name_only = []
+    name_only, by_hand = [], []
     if "canvas" in targets:
-        name_only = [s for s in export.students if not (s.canvas_id or s.sis_user_id or s.sis_login_id)]
+        how = {id(s): canvas_match(s, lms_text(s.display_name)) for s in export.students}
+        name_only = [s for s in export.students if how[id(s)] == "name"]
+        by_hand = [s for s in export.students if not how[id(s)]]
         problems += [("matched by name", s, f"roster line {s.line} has no Canvas ID, SIS User ID or SIS Login "
-                      "ID: Canvas can match it only by its name") for s in name_only]
+                      f"ID Canvas can use: Canvas can match it only by its name {s.name!r}") for s in name_only]
+        problems += [("match by hand", s, f"roster line {s.line}: {canvas_unmatched(s, lms_text(s.display_name))}; Canvas lists the row as an "
+                      "unknown student to match by hand on upload (give it its canvas_id)") for s in by_hand]
     for fmt, path in targets.items():
-        _write(path, rows[fmt])
+        _write(path, rows[fmt], moodle_cell if fmt == "moodle" else None)
     report = out / "lms-report.csv"
     _write(report, _report_rows(export, problems))
-    return {"export": export, "files": targets, "left_out": left_out, "name_only": name_only, "report": report}
+    return {"export": export, "files": targets, "left_out": left_out, "name_only": name_only, "by_hand": by_hand,
+            "report": report}
 

@@ -28,6 +28,7 @@ import json
 from ..grading import figures
 from .records import VISIBILITIES, SubmissionRecord, score_of, to_gradescope
 from .rubric import WrittenGrades
+from .shown import for_students, submitted_name
 
 __all__ = ["score_of", "gradescope_results", "to_gradescope", "feedback_markdown", "feedback_html",
            "write_gradebook", "write_outputs", "VISIBILITIES"]
@@ -44,9 +45,9 @@ def _records(results):
     return [r if isinstance(r, SubmissionRecord) else SubmissionRecord.from_dict(r) for r in results]
 
 
-MANUAL_OUTPUT = ("Written answer, graded by hand on Gradescope ({points} points): instructors, add a manual "
-                 "question for it in the assignment's outline")
-"""What Gradescope shows under a written question that no rubric graded here."""
+MANUAL_OUTPUT = "Written answer, graded by hand on Gradescope ({points} points)"
+"""What Gradescope shows under a written question that no rubric graded here (to add it as a manual question
+of the assignment's outline is the instructors' part: ``GRADESCOPE.md`` of the bundle says so)."""
 
 
 def _written_entry(exercise, k, top, entry, answered):
@@ -111,8 +112,8 @@ def gradescope_results(student, results, hidden_visibility="after_published", ma
     data["tests"] = tests + rest  # the top-level score is already the records' totals (written grades included)
     if any(r.written for r in results):
         data["extra_data"]["written"] = {r.exercise: r.written for r in results if r.written}
-        data["output"] = "\n".join([data["output"], *(f"{r.exercise}: {_written_summary(r)}" for r in results
-                                                      if r.written)]).strip()
+        data["output"] = "\n".join([data["output"], *(f"{r.exercise}: {_written_summary(r, hidden_visibility)}"
+                                                      for r in results if r.written)]).strip()
     return data
 
 
@@ -131,9 +132,12 @@ def _written_points(entry):
         f"not graded yet / {top}"
 
 
-def _written_summary(result):
-    return (f"Tests {_fmt(result.score)} / {_fmt(result.max_score)}; written answers, graded by people, "
-            f"{_fmt(result.written_score)} / {_fmt(result.written_max)}")
+def _written_summary(result, hidden_visibility="visible"):
+    """Tests and written answers in one line; on Gradescope (`hidden_visibility`) the visible tests only."""
+    score, top = result.visible_score(hidden_visibility)
+    hidden = score_of(result.tests) != (score, top)
+    return (f"Tests {_fmt(score)} / {_fmt(top)}{' (the tests you can see)' if hidden else ''}; written answers, "
+            f"graded by people, {_fmt(result.written_score)} / {_fmt(result.written_max)}")
 
 
 def _written_markdown(result):
@@ -143,7 +147,7 @@ def _written_markdown(result):
     out = [_written_summary(result) + ":", "", "| question | points | comment |", "| --- | ---: | --- |"]
     out += [f"| Question {_cell(w['question'])} | {_written_points(w)} | {_cell(w.get('comment', ''))} |"
             for w in result.written]
-    versions = sorted({w["rubric"] for w in result.written if w.get("rubric")})
+    versions = sorted({for_students(w["rubric"]) for w in result.written if w.get("rubric")})
     return out + ["", *(f"- Written answers graded with the rubric {v}" for v in versions)]
 
 
@@ -157,16 +161,16 @@ def feedback_markdown(student, results):
     for result in results:
         out += [f"## {result.exercise}: {_fmt(result.total)} / {_fmt(result.total_max)}", ""]
         if result.notebook:
-            out += [f"Graded notebook: `{result.notebook}`", ""]
+            out += [f"Graded notebook: `{submitted_name(result.notebook)}`", ""]
         out += ["| | test | points | what happened |", "| --- | --- | ---: | --- |"]
         for test in result.tests:
             mark = "✅" if test.passed else "❌"
             name = test.title + (" *(hidden)*" if test.hidden else "")
             out.append(f"| {mark} | {_cell(name)} | {_fmt(test.score)} / {_fmt(test.max_score)} | "
-                       f"{_cell('' if test.passed else test.reason)} |")
+                       f"{_cell('' if test.passed else for_students(test.reason))} |")
         out.append("")
         out += _written_markdown(result)
-        out += [f"- {note}" for note in result.notes]
+        out += [f"- {for_students(note)}" for note in result.notes]
         if result.seed is not None and any(t.hidden for t in result.tests):
             out.append(f"- Hidden tests drew their random parameters with seed {result.seed}.")
         out += [f"- {line}" for line in result.late_lines()]
@@ -220,7 +224,7 @@ def _written_html(result):
     e = html.escape
     rows = "".join(f'<tr><td>Question {e(str(w["question"]))}</td><td class="points">{e(_written_points(w))}'
                    f'</td><td>{e(w.get("comment", ""))}</td></tr>' for w in result.written)
-    versions = sorted({w["rubric"] for w in result.written if w.get("rubric")})
+    versions = sorted({for_students(w["rubric"]) for w in result.written if w.get("rubric")})
     return (f'<p class="meta">{e(_written_summary(result))}</p>'
             '<table class="written"><colgroup><col class="test"><col class="points"><col></colgroup>'
             f"<thead><tr><th>written answer</th><th>points</th><th>comment</th></tr></thead><tbody>{rows}"
@@ -257,7 +261,7 @@ def feedback_html(student, results):
         out.append(f'<section class="exercise"><h2>{e(result.exercise)}: {_fmt(result.total)} / '
                    f'{_fmt(result.total_max)}</h2>')
         if result.notebook:
-            out.append(f'<p class="meta">Graded notebook: <code>{e(str(result.notebook))}</code></p>')
+            out.append(f'<p class="meta">Graded notebook: <code>{e(submitted_name(result.notebook))}</code></p>')
         out.append('<table><colgroup><col class="mark"><col class="test"><col class="points"><col></colgroup>'
                    "<thead><tr><th></th><th>test</th><th>points</th><th>what happened</th></tr></thead><tbody>")
         for test in result.tests:
@@ -266,11 +270,11 @@ def feedback_html(student, results):
             out.append(f'<tr class="{status}"><td class="mark">{"✓" if test.passed else "✗"}</td>'
                        f"<td>{e(test.title)}{hidden}</td>"
                        f'<td class="points">{_fmt(test.score)} / {_fmt(test.max_score)}</td>'
-                       f'<td class="reason">{"" if test.passed else e(test.reason)}</td></tr>')
+                       f'<td class="reason">{"" if test.passed else e(for_students(test.reason))}</td></tr>')
             out.append(_figures_row(test))
         out.append("</tbody></table>")
         out.append(_written_html(result))
-        notes = [e(n) for n in result.notes]
+        notes = [e(for_students(n)) for n in result.notes]
         if result.seed is not None and any(t.hidden for t in result.tests):
             notes.append(f"Hidden tests drew their random parameters with seed {e(str(result.seed))}.")
         notes += [e(line) for line in result.late_lines()]

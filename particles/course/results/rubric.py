@@ -16,7 +16,9 @@ named by any of their names or aliases (:mod:`particles.course.term.identity`), 
 compares names (case and Unicode forms aside).
 
 ``particles grade ... --rubric FILE`` (repeatable; a folder stands for every
-``*.csv`` file under it) checks every row first and refuses the whole run
+``*.csv`` file under it, read per exercise: the rows of the course's exercises
+that the run does not grade are left for the run that grades them, as
+``particles review`` writes one rubric per exercise) checks every row first and refuses the whole run
 (exit status 2, before anything is graded) on: an unknown exercise, student
 or question, points that are not a number or fall outside
 ``[0, max_points]``, a ``max_points`` that disagrees with the master, a row
@@ -42,6 +44,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..grading.discovery import released_exercise
+from ..paths import exercise_tests
 from ..release.answers import question_points
 from ..term.identity import Identity
 
@@ -142,8 +145,12 @@ def _version(path):
     return f"{path} sha256:{hashlib.sha256(path.read_bytes()).hexdigest()[:16]}"
 
 
-def _read(path, questions, students, seen, problems):
-    """The checked :class:`Grade` s of one file; what is wrong goes to `problems` (``seen``: rows so far)."""
+def _read(path, questions, students, seen, problems, others=()):
+    """The checked :class:`Grade` s of one file; what is wrong goes to `problems` (``seen``: rows so far).
+
+    Rows of the exercises `others` (of the course, not graded in this run) are skipped: a folder of rubrics is
+    read per exercise.
+    """
     try:
         text = path.read_bytes().decode("utf-8-sig")
     except (OSError, UnicodeDecodeError) as error:
@@ -173,6 +180,8 @@ def _read(path, questions, students, seen, problems):
             continue
         cell = {name: value.strip() for name, value in zip(header, row)}
         exercise, student = cell["exercise"], cell["student"]
+        if exercise in others and exercise not in questions:
+            continue
         if exercise not in questions:
             problems.append(f"{where}: unknown exercise {exercise!r}; expected one of "
                             f"{', '.join(sorted(questions)) or '(none graded here)'}")
@@ -272,8 +281,11 @@ class WrittenGrades:
             for unit in units:
                 identity.admit(unit.student)
         grades, problems, seen = [], [], {}
+        named = {Path(p).resolve() for p in paths or () if Path(p).is_file()}
+        course = set(exercise_tests(root))  # a folder's rubrics of the course's other exercises: not this run's
         for path in rubric_files(paths or ()):
-            grades += _read(path, questions, identity, seen, problems)
+            others = () if path.resolve() in named else course
+            grades += _read(path, questions, identity, seen, problems, others)
         if problems:
             raise RubricError(problems)
         return cls(grades, None, questions)

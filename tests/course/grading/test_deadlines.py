@@ -4,7 +4,8 @@ from datetime import datetime, timedelta, timezone
 
 import pytest
 
-from particles.course.grading.deadlines import (Course, LatePolicy, apply_late, decide, find_course, load_course)
+from particles.course.grading.deadlines import (Course, LatePolicy, apply_late, decide, find_course, load_course,
+                                                parse_time)
 from particles.course.results.records import SubmissionRecord, TestRecord
 
 EXERCISES = ["00_warmup", "01_integrator_order"]
@@ -138,6 +139,11 @@ def test_apply_late_uses_the_students_deadline_and_the_records_points(tmp_path):
     ("[exercises.00_warmup]\ndeadline = 2026-10-01T23:59:00Z\n[extensions.alice]\n00_warmup = 2026-10-03T12:00:00",
      r"extensions\.alice\.00_warmup: .* no time zone"),
     ("[exercises.00_warmup\n", r"is not valid TOML"),
+    ('[exercises.00_warmup]\ndeadline = "2026-10-01T23:59 Mars/Olympus"', r"00_warmup\.deadline: unknown time zone "
+                                                                          r"'Mars/Olympus'"),
+    ('[exercises.00_warmup]\ndeadline = "2026-03-29T02:30 Europe/Berlin"', r"does not exist in Europe/Berlin"),
+    ('[exercises.00_warmup]\ndeadline = "2026-10-25T02:30 Europe/Berlin"',
+     r"happens twice in Europe/Berlin .*2026-10-25T02:30:00\+02:00 or 2026-10-25T02:30:00\+01:00"),
 ])
 def test_bad_course_files_are_errors_naming_the_file_and_key(tmp_path, text, message):
     """Every mistake of a course file is a ValueError naming the file and the key at fault."""
@@ -158,3 +164,24 @@ def test_the_course_file_is_found_at_the_root_or_given(tmp_path):
         find_course(tmp_path, EXERCISES, tmp_path / "missing.toml")
 
 
+def test_named_zones_follow_daylight_saving():
+    """A deadline in Europe/Berlin is CEST in July and CET in November, in both spellings; an offset still works."""
+    summer = parse_time("2026-07-01T23:59 Europe/Berlin", "deadline")
+    winter = parse_time("2026-11-01T23:59:00[Europe/Berlin]", "deadline")
+    assert (summer.utcoffset(), winter.utcoffset()) == (timedelta(hours=2), timedelta(hours=1))
+    assert parse_time("2026-07-01T23:59:00+02:00", "deadline") == summer
+    due = parse_time("2026-10-29T23:59 Europe/Berlin", "deadline")  # after the clocks went back (Oct 25)
+    assert decide(due + timedelta(hours=2), due, LatePolicy(0.1, 0.5), 10)["reason"].endswith("cap 50%)")
+    assert "2026-10-29 23:59 +01:00" in decide(due, due, LatePolicy(0.1, 0.5), 10)["reason"]
+
+
+def test_every_error_of_a_course_file_at_once(tmp_path):
+    """A course file with four mistakes is refused once, naming each key: none is left for the next run."""
+    text = ("[late]\ncap = 2\npenalty_per_day = -1\n[exercises.00_warmup]\ndeadline = 2026-10-01T23:59:00\n"
+            "[exercises.99_x]\ndeadline = 2026-10-01T23:59:00Z\n")
+    with pytest.raises(ValueError) as caught:
+        _course(tmp_path, text)
+    message = str(caught.value)
+    assert "4 problems:" in message and str(tmp_path / "course.toml") in message
+    for key in ("late.cap:", "late.penalty_per_day:", "exercises.00_warmup.deadline:", "exercises.99_x:"):
+        assert f"\n  {key}" in message, key

@@ -151,7 +151,8 @@ def test_late_work_is_penalized_and_one_student_is_regraded_alone(tmp_path):
     assert "Graded by tests version" in (out / "bob" / "feedback.html").read_text()
     results = json.loads((out / "bob" / "results.json").read_text())
     assert results["score"] == 9.9 and results["extra_data"]["late"]["00_warmup"]["penalty"] == 1.1
-    assert "Late: raw score 11" in results["output"]
+    assert "Late: submitted 10 hours after the deadline" in results["output"]  # no points: hidden tests hidden
+    assert "raw score" not in results["output"]
 
     # bad uses of --student, refused before anything is graded
     with pytest.raises(ValueError, match="unknown student 'carol'.*the students are alice, bob"):

@@ -15,6 +15,7 @@ import pytest
 from particles.course.term.database import TermRecord
 from particles.course.grading.intake import (DEFAULT_LIMITS, Limits, NotebookRejected, ZipRefused, extract_zip,
                                              read_notebook)
+from particles.course.grading.session import NOT_RUN
 
 ROOT = Path(__file__).resolve().parents[3]
 MASTER = ROOT / "solutions" / "00_warmup.ipynb"
@@ -52,6 +53,8 @@ def _json(data):
 # kind -> (the file's bytes, or a function making the file at a path; a piece of the expected reason)
 MALFORMED = {
     "not_json": (b'{"cells": [', "is not valid JSON (Expecting value at line 1"),
+    "unterminated": (b'{"cells": ["abc', "is not valid JSON (Unterminated string starting at line 1, column 12)"),
+    "control_character": (b'{"cells": ["a\tb"]}', "is not valid JSON (Invalid control character at line 1, column 14)"),
     "truncated": (_json(notebook())[:-7], "is not valid JSON"),
     "nbformat3": (_json({"nbformat": 3, "nbformat_minor": 0, "metadata": {}, "worksheets": [{"cells": []}]}),
                   "is nbformat 3, expected 4: open it in Jupyter"),
@@ -289,10 +292,13 @@ def test_a_run_over_bad_input_grades_everyone_and_loses_no_one(tmp_path):
         assert len(record["tests"]) > 5 and len(reasons) == 1 and "\n" not in reasons.pop()
         assert record["grader_status"] is None  # never kept by --resume: checked again next time
     record = records["latin1"]
-    assert "your notebook latin1.ipynb could not be read: it is not UTF-8 text" in record["tests"][0]["reason"]
+    assert record["tests"][0]["reason"] == NOT_RUN  # the reason once, in the notes, not in every test
     assert "Not graded: your notebook latin1.ipynb could not be read: it is not UTF-8" in record["notes"][0]
-    conflict = records["Alice"]["tests"][0]["reason"]
-    assert str(subs / "Alice" / "00_warmup.ipynb") in conflict and str(subs / "alice.ipynb") in conflict
+    feedback = (out / "latin1" / "feedback.md").read_text()
+    assert feedback.count("could not be read") == 1 and str(subs) not in feedback
+    conflict = records["Alice"]["notes"][0]
+    assert "00_warmup.ipynb" in conflict and "alice.ipynb" in conflict and str(subs) not in conflict
+    assert "grade again" not in conflict and f"{subs / 'alice.ipynb'}" in done.stderr
     assert "mallory" not in rows and f"{subs / 'mallory.ipynb'}: a link to" in done.stderr
     assert "bomb.zip: zip refused: member '../zed/00_warmup.ipynb' goes up" in done.stderr
     assert "canvas.zip:zoe_late_11_22_00_warmup.ipynb" in records["zoe"]["notebook"]
