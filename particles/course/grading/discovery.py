@@ -365,9 +365,11 @@ def find_submissions(paths, exercises, exercise=None, *, workdir=None, limits=DE
             unit = _read(candidate, exercises, exercise, problems, limits)
             if unit is not None:
                 found += [(unit, candidate, who) for who in candidate.submitters]
-    units = []
-    for unit, candidate, (name, aliases) in sorted(found, key=lambda f: (filing_name(f[2][0]), f[0].where)):
-        units.append(_admitted(unit, name, aliases, identity, problems))
+    admitted = {}  # students admitted in the sorted order of their names (the first spelling names them) ...
+    for k in sorted(range(len(found)), key=lambda k: (filing_name(found[k][2][0]), found[k][0].where)):
+        unit, _, (name, aliases) = found[k]
+        admitted[k] = _admitted(unit, name, aliases, identity, problems)
+    units = [admitted[k] for k in range(len(found))]  # ... their notebooks kept in the order they were found
     return _one_per_student(units, problems), problems
 
 

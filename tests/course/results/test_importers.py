@@ -159,7 +159,7 @@ def test_canvas_read_is_the_ported_converter():
 
 def test_canvas_match_order():
     """ID first, then SIS User ID, SIS Login ID, then the name as written; nothing when none of them will do."""
-    from particles.course.results.lms import RosterStudent
+    from particles.course.term.roster import RosterStudent
     s = RosterStudent("x", 2, name="X", canvas_id="5", sis_user_id="S", sis_login_id="L")
     assert canvas_match(s, "X") == "ID"
     assert canvas_match(RosterStudent("x", 2, name="X", sis_user_id="S", sis_login_id="L"), "X") == "SIS User ID"
