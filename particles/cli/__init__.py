@@ -27,13 +27,13 @@ Each verb module has ``register(commands)``, which adds its parser to the ``argp
 import argparse
 import sys
 
-from . import (check, demo, export, grade, gradescope_bundle, new_exercise, release, review, similarity, site,
-               study, tour, warm)
+from . import (check, demo, export, grade, gradescope_bundle, new_exercise, record, release, review, similarity,
+               site, study, tour, warm)
 
 __all__ = ["main", "build_parser", "VERBS"]
 
-VERBS = (tour, demo, study, warm, site, check, release, grade, review, new_exercise, export, gradescope_bundle,
-         similarity)
+VERBS = (tour, demo, study, warm, site, check, release, grade, review, new_exercise, export, record,
+         gradescope_bundle, similarity)
 """The verbs' modules, in the order ``particles --help`` lists them."""
 
 

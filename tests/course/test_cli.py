@@ -166,3 +166,25 @@ def test_grade_says_which_written_answers_the_rubric_leaves_ungraded(tmp_path, c
     err = capsys.readouterr().err
     assert code == 0 and "rubric: 1 written answer(s) not graded yet, counted 0 until they are: ada 00_warmup " \
                          "question 1" in err
+
+
+def test_the_record_verb_shows_runs_and_history_and_retires_a_result_saying_who_and_why(tmp_path, capsys):
+    """`particles record OUT` lists the runs and what is not graded yet; --history a student's results; --retire
+    makes the current one history, refusing without a reason."""
+    from particles.course.results.records import SubmissionRecord, TestRecord
+    from particles.course.term.database import TermRecord
+
+    term = TermRecord(tmp_path)
+    run = term.start_run("particles grade subs/ --out grades", {})
+    term.save(run, SubmissionRecord(student="ann", exercise="00_warmup", complete=True, grader_status=0,
+                                    tests=[TestRecord("t", "t", 3.0, passed=True)]), {})
+    term.finish_run(run)
+    term.close()
+    assert main(["record", str(tmp_path)]) == 0
+    assert "run 1: complete" in capsys.readouterr().out
+    assert main(["record", str(tmp_path), "--retire", "ann", "00_warmup"]) == 2
+    assert "--retire needs --why" in capsys.readouterr().err
+    assert main(["record", str(tmp_path), "--retire", "ann", "00_warmup", "--why", "copied", "--who", "prof"]) == 0
+    assert main(["record", str(tmp_path), "--history", "ann"]) == 0
+    assert "history: retired by prof: copied" in capsys.readouterr().out
+    assert main(["record", str(tmp_path / "nothing")]) == 2

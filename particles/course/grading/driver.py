@@ -252,6 +252,7 @@ def _stages(options, course, identity, plan, before, recorder, runner, progress,
     if options.out is not None:
         options.logs.mkdir(parents=True, exist_ok=True)
     recorder.start(units, times.of)
+    recorder.keep_course(course)
     written = recorder.keep_written(written)
     collect = Collector(recorder, LateWork(course, times, units), progress_report(options, written),
                         progress, done=others)

@@ -45,6 +45,9 @@ class Recorder(Protocol):
         """Keep the written grades of this run's rubrics (a :class:`~particles.course.results.rubric.WrittenGrades`);
         returns every written grade the record holds, theirs included."""
 
+    def keep_course(self, course):
+        """Keep what the course file said this run (its extensions, as the late decisions used them)."""
+
 
 class MemoryRecorder:
     """The records of one run in memory: nothing is kept for a later run."""
@@ -75,6 +78,9 @@ class MemoryRecorder:
 
     def keep_written(self, written):
         return written
+
+    def keep_course(self, course):
+        pass
 
 
 class Collector:

@@ -278,6 +278,11 @@ class TermRecord:
         with self.transaction() as db:
             db.execute("UPDATE runs SET status = ?, finished = ? WHERE id = ?", (status, now(), run))
 
+    def runs(self):
+        """Every run, oldest first: dicts of id, started, finished, status, command, planned."""
+        rows = self.db.execute("SELECT id, started, finished, status, command, planned FROM runs ORDER BY id")
+        return [dict(zip(("id", "started", "finished", "status", "command", "planned"), row)) for row in rows]
+
     def run_info(self, run):
         """``{id, started, status, command}`` of run `run` (None when there is no such run)."""
         row = self.db.execute("SELECT id, started, status, command FROM runs WHERE id = ?", (run,)).fetchone()
@@ -383,12 +388,15 @@ class TermRecord:
             out[(name, exercise)] = record
         return out
 
-    def history(self, student, exercise):
-        """Every result of `student`'s `exercise`, oldest first: dicts of id, run, total, current, ended_why."""
+    def history(self, student, exercise=None):
+        """Every result of `student` (of `exercise` only, when given), oldest first: dicts of id, exercise, run,
+        total, total_max, current, ended_why."""
         rows = self.db.execute(
-            "SELECT r.id, r.run, r.total, r.current, r.ended_why FROM results r JOIN students s ON s.id = r.student "
-            "WHERE s.name = ? AND r.exercise = ? ORDER BY r.id", (student, exercise)).fetchall()
-        return [dict(zip(("id", "run", "total", "current", "ended_why"), row)) for row in rows]
+            "SELECT r.id, r.exercise, r.run, r.total, r.total_max, r.current, r.ended_why FROM results r JOIN "
+            "students s ON s.id = r.student WHERE s.name = ? AND (? IS NULL OR r.exercise = ?) ORDER BY r.id",
+            (student, exercise, exercise)).fetchall()
+        return [dict(zip(("id", "exercise", "run", "total", "total_max", "current", "ended_why"), row))
+                for row in rows]
 
     def kept(self, unit, version, options):
         """The current record a resumed run keeps for `unit`: complete, of the same notebook (SHA-256), graded

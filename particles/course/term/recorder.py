@@ -106,3 +106,8 @@ class DatabaseRecorder:
         for exercise in {g.exercise for g in grades} - set(questions):  # an exercise no longer in the course
             questions[exercise] = {g.question: g.max_points for g in grades if g.exercise == exercise}
         return WrittenGrades(grades, None, questions)
+
+    def keep_course(self, course):
+        """The course file's extensions, as this run applies them."""
+        if course is not None:
+            self.term.save_extensions(self.run, course)

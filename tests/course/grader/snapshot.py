@@ -33,7 +33,7 @@ ROOT = Path(__file__).resolve().parents[3]
 HERE = Path(__file__).resolve().parent
 
 # fields of a record that differ between two runs of the same grading
-_VOLATILE = {"seconds", "sandbox", "isolation", "notebook", "worker", "graded_at", "run"}
+_VOLATILE = {"seconds", "sandbox", "isolation", "notebook", "worker", "graded_at", "run", "resumed"}
 _TIMING = re.compile(r"\(\d+(\.\d+)? s\)|\d+(\.\d+)? s\b|in \d+(\.\d+)?s")
 # in any text: the uid a worker ran as (drawn per run), the library's digest (changes with any commit), where
 # an endless loop happened to be when it was stopped, and a clock's time (a file's modification time: the
@@ -63,15 +63,40 @@ def _record(path, tmp):
     return json.loads(_clean(json.dumps(data, sort_keys=True), tmp))
 
 
+def _records(out, tmp):
+    """The current records of the course record of `out`, as ``records/<student>__<exercise>.json`` entries (the
+    layout of the grader before the course record, so that the two can be compared)."""
+    from particles.course.term.database import DATABASE, TermRecord
+
+    if not (Path(out) / DATABASE).exists():
+        return {}
+    term = TermRecord(out)
+    try:
+        current = term.current()
+    finally:
+        term.close()
+    found = {}
+    for (student, exercise), record in current.items():
+        data = record.to_dict()
+        data.pop("options", None)
+        for name in _VOLATILE:
+            data.pop(name, None)
+        for test in data.get("tests", []):
+            test.pop("seconds", None)
+        found[f"records/{student}__{exercise}.json"] = json.loads(_clean(json.dumps(data, sort_keys=True), tmp))
+    return found
+
+
 def _outputs(out, tmp):
     """Everything a grading run wrote in `out` that a student or an instructor reads."""
-    found = {}
+    found = _records(out, tmp)
     for path in sorted(Path(out).rglob("*")):
         name = str(path.relative_to(out))
-        if not path.is_file() or name.startswith("logs/") or name.endswith((".html", ".png")):
+        if not path.is_file() or name.startswith(("logs/", "course.sqlite")) or name.endswith((".html", ".png")):
             continue  # logs hold timings; the HTML feedback is the Markdown one drawn (its figures' bytes vary)
         if name.startswith("records/"):
             found[name] = _record(path, tmp)
+            found[name].pop("options", None)
         elif name.endswith("results.json"):
             data = json.loads(path.read_text())
             data.pop("execution_time", None)

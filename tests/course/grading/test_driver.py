@@ -269,6 +269,9 @@ class MemoryRecorder:
     def keep_written(self, written):
         return written
 
+    def keep_course(self, course):
+        self.marks.append(("course", sorted(course.extensions)))
+
 
 def test_a_whole_run_through_memory_run_and_record_stages(tmp_path):
     """grade() with the run and record stages swapped for in-memory fakes: every notebook gets one current record,
@@ -280,7 +283,7 @@ def test_a_whole_run_through_memory_run_and_record_stages(tmp_path):
     summary = grade([subs], None, runner=runner, recorder=recorder, progress=seen.append, jobs=1, **options)
     assert sorted(s for s, _ in recorder.records) == ["alice", "bob", "carl", "dana", "eve", "malformed"]
     assert sorted(r.student for r in seen) == sorted(recorder.saved) == sorted(summary["students"])
-    assert recorder.marks == [("start", 6), ("finish", True)] and runner.closed == "done"
+    assert recorder.marks == [("start", 6), ("course", ["alice"]), ("finish", True)] and runner.closed == "done"
     assert recorder.times["bob"][1] == "the times file"
     # dana's batch: sent, lost, sent again, lost, then cut into single notebooks; dana alone is lost twice more
     dana_batches = [b for b in runner.submitted if "dana" in b]
