@@ -15,6 +15,7 @@ Modules:
 * ``review.py``: ``particles review``, the written answers' pages and rubrics;
 * ``new_exercise.py``: ``particles new-exercise``, a template master and test module;
 * ``export.py``: ``particles export``, the grades and the feedback zips for Canvas and Moodle;
+* ``record.py``: ``particles record``, the term's record: its runs, a student's history, a result retired;
 * ``gradescope_bundle.py``: ``particles gradescope-bundle``, the Gradescope autograder zip;
 * ``similarity.py``: ``particles similarity``, submitted functions equal to others.
 
