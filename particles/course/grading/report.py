@@ -31,14 +31,19 @@ def statuses(done, pending, run=None):
     pending : iterable of (student, exercise, run)
         Notebooks a run meant to grade and no run has graded since (run None: this run, still going).
     """
-    waiting = {}
-    for student, exercise, started in pending:
-        why = "this run has not finished" if started in (None, run) else f"run {started} was interrupted"
-        waiting.setdefault(student, []).append(f"{exercise} not graded yet ({why}; rerun with --resume)")
-    for (student, exercise), record in done.items():
+    waiting, said = {}, set()
+    for (student, exercise), record in done.items():  # a notebook no machine could grade: says why
         lost = [note for note in record.notes if note.startswith("Not graded yet")]
         if not record.complete and lost:
-            waiting.setdefault(student, []).append(f"{exercise} incomplete ({lost[0]}; rerun with --resume)")
+            waiting.setdefault(student, []).append(f"{exercise} not graded yet ({lost[0][len('Not graded yet: '):]}; "
+                                                   "rerun with --resume)")
+            said.add((student, exercise))
+    for student, exercise, started in pending:
+        if (student, exercise) in said:
+            continue
+        why = "this run has not finished" if started is None else (
+            f"run {started} did not grade it" if started == run else f"run {started} was interrupted")
+        waiting.setdefault(student, []).append(f"{exercise} not graded yet ({why}; rerun with --resume)")
     return {student: "; ".join(items) for student, items in waiting.items()}
 
 

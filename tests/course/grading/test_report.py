@@ -59,3 +59,18 @@ def test_gradescope_gets_every_test_failed_with_the_reason_when_no_notebook_was_
     write_gradescope(options, [_record("submission")], [], "walls", WrittenGrades(), changed=["x.py"])
     changed = json.loads(target.read_text())
     assert changed["score"] == 0 and changed["tests"] == [] and "files changed" in changed["output"]
+
+
+def test_the_gradebook_status_says_what_each_row_still_waits_for():
+    """A notebook a run did not finish, one of an interrupted run, one no machine could grade: each is named with
+    what to do; a row with nothing pending has no status."""
+    from particles.course.grading.report import statuses
+
+    lost = _record("cy")
+    lost.complete, lost.notes = False, ["Not graded yet: worker tcp://10.0.0.7 died"]
+    done = {("ann", "00_warmup"): _record("ann"), ("cy", "00_warmup"): lost}
+    pending = [("bo", "00_warmup", None), ("di", "01_integrator_order", 3), ("cy", "00_warmup", 4)]
+    said = statuses(done, pending, run=4)
+    assert said == {"bo": "00_warmup not graded yet (this run has not finished; rerun with --resume)",
+                    "di": "01_integrator_order not graded yet (run 3 was interrupted; rerun with --resume)",
+                    "cy": "00_warmup not graded yet (worker tcp://10.0.0.7 died; rerun with --resume)"}
