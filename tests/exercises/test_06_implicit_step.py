@@ -71,7 +71,7 @@ def _reference_step(x, v, h, m, ij, k, L0, g, free, variant=None):
     x, v, m = np.asarray(x, dtype=float), np.asarray(v, dtype=float), np.asarray(m, dtype=float)
     n, d = x.shape
     F = _forces(x, ij, k, L0)
-    F[:, -1] -= m * g
+    F[:, -1] -= {"no gravity": 0.0, "gravity without masses": g}.get(variant, m * g)
     K = _K(x, ij, k, L0)
     A = np.diag(np.repeat(m, d)) - (h if variant == "h K" else h**2) * K
     b = h * F.ravel() + (0.0 if variant == "no h K v" else h**2 * K @ v.ravel())
@@ -92,7 +92,10 @@ def _step_hints(x, v, h, m, ij, k, L0, g, free, part):
         ("a step whose positions use the old velocity, x + h v, instead of the new one, x + h v_new",
          "old velocity"),
         ("an explicit step (the system solved with M alone: the h^2 K term is missing)", "explicit"),
-        ("a step that moves the pinned particles (their rows and columns must be left out)", "pins move"))}
+        ("a step that moves the pinned particles (their rows and columns must be left out)", "pins move"),
+        ("a step without gravity: F is the springs' forces plus -m g on the last axis", "no gravity"),
+        ("a step with gravity without the masses (-g instead of -m g in F, a force in newtons)",
+         "gravity without masses"))}
 
 
 def _thread():

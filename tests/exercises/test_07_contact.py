@@ -71,6 +71,11 @@ def _wrong_response(v, n, eps, mu, v_rest, variant):
     tangential = v_t - removed * np.divide(v_t, speed, out=np.zeros_like(v_t), where=speed > 0)
     if variant == "whole velocity":
         tangential = e * tangential
+    if variant == "friction when separating":  # the normal part right, friction from (1 + e) |v . n| on every row
+        e_all = np.where(-vn <= v_rest, 0.0, eps)[:, None]
+        removed = np.minimum(mu * (1 + e_all) * np.abs(vn)[:, None], speed)
+        friction = removed * np.divide(v_t, speed, out=np.zeros_like(v_t), where=speed > 0)
+        return np.where((vn < 0)[:, None], -e * v_n, v_n) + v_t - friction
     return np.where(approaching, tangential + normal, v)
 
 
@@ -88,6 +93,8 @@ _RESPONSE_HINTS = (
      "separating responded"),
     ("resting contacts that bounce: a contact with |v . n| <= v_rest gets no restitution (eps = 0)",
      "resting bounces"),
+    ("friction on separating particles too: a particle moving away (v . n >= 0) gets no impulse, along the normal "
+     "or across it", "friction when separating"),
 )
 
 

@@ -22,9 +22,9 @@ result matches a midpoint step", "your first record is not X0", "did not
 finish within 2 s". A case may add ``"diagnosis": {test: phrase}`` for that
 when its ``fails`` pieces only locate the failure.
 
-A case starts from the master notebook ``solutions/NN_topic.ipynb`` and
-replaces the code cell that defines each named function (``replace``), or
-appends code cells (``append``). The 00_warmup corpus (``corpus.py``) is the
+A case starts from the master notebook ``solutions/NN_topic.ipynb`` without
+its instructor-only cells (as students get it) and replaces the code cell that
+defines each named function (``replace``), or appends code cells (``append``). The 00_warmup corpus (``corpus.py``) is the
 larger one that tests the grader's defences; these test the exercises.
 """
 
