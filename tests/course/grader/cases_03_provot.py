@@ -40,6 +40,25 @@ def _pass(shares=_SHARES, excess=_EXCESS, scatter=_SCATTER):
     return _PASS_HEAD + shares + excess + scatter
 
 
+def _sequential(share):
+    """Provot's sequential pass, spring by spring in the given order, with the first end's share `share`."""
+    return f'''
+def provot_pass(x, indices, L0, free, max_strain=0.1):
+    x = np.array(x, dtype=float)
+    for (i, j), rest in zip(np.asarray(indices).tolist(), np.asarray(L0, dtype=float).tolist()):
+        if not (free[i] or free[j]):
+            continue
+        d = x[j] - x[i]
+        L = np.sqrt(d @ d)
+        e = L - (1 + max_strain) * rest
+        if e > 0:
+            share_i = {share}
+            x[i] += share_i * e * d / L
+            x[j] -= (1 - share_i) * e * d / L
+    return x
+'''
+
+
 PASS_TESTS = ["test_provot_pass_one_spring[both free]", "test_provot_pass_one_spring[first pinned]",
               "test_provot_pass_one_spring[second pinned]", "test_provot_pass_one_spring[both pinned]",
               "test_provot_pass_shared_particle", "test_provot_pass_random_cloths"]
@@ -244,21 +263,7 @@ REJECTED.update({
     # so with both ends free the first takes the whole excess and the second none.
     "sequential_shares_from_a_sum_of_booleans": {
         "culprit": "provot_pass",
-        "replace": {"provot_pass": '''
-def provot_pass(x, indices, L0, free, max_strain=0.1):
-    x = np.array(x, dtype=float)
-    for (i, j), rest in zip(np.asarray(indices).tolist(), np.asarray(L0, dtype=float).tolist()):
-        if not (free[i] or free[j]):
-            continue
-        d = x[j] - x[i]
-        L = np.sqrt(d @ d)
-        e = L - (1 + max_strain) * rest
-        if e > 0:
-            share_i = free[i] / (free[i] + free[j])
-            x[i] += share_i * e * d / L
-            x[j] -= (1 - share_i) * e * d / L
-    return x
-'''},
+        "replace": {"provot_pass": _sequential("free[i] / (free[i] + free[j])")},
         "fails": {"test_provot_pass_one_spring[both free]": "moved the midpoint to x = 0.95 m; with both ends free "
                                                             "each end moves half the excess",
                   "test_provot_pass_random_cloths": "your result matches a pass that moves only the first end of a "
@@ -320,21 +325,7 @@ def provot_pass(x, indices, L0, free, max_strain=0.1):
     # Provot's sequential pass as he wrote it, spring by spring in the order given, each correction in place:
     # slow in Python, but within the time limits on the grader's cloths.
     "provot_spring_by_spring": {
-        "replace": {"provot_pass": '''
-def provot_pass(x, indices, L0, free, max_strain=0.1):
-    x = np.array(x, dtype=float)
-    for (i, j), rest in zip(np.asarray(indices).tolist(), np.asarray(L0, dtype=float).tolist()):
-        if not (free[i] or free[j]):
-            continue
-        d = x[j] - x[i]
-        L = np.sqrt(d @ d)
-        e = L - (1 + max_strain) * rest
-        if e > 0:
-            share_i = float(free[i]) / (float(free[i]) + float(free[j]))
-            x[i] += share_i * e * d / L
-            x[j] -= (1 - share_i) * e * d / L
-    return x
-'''},
+        "replace": {"provot_pass": _sequential("float(free[i]) / (float(free[i]) + float(free[j]))")},
     },
     "bincount_per_coordinate": {
         # the same mathematics written differently: einsum lengths, bincount scatters, frames at once

@@ -51,6 +51,21 @@ def implicit_step(x, v, h, m, ij, k, L0, g, free):
 '''
 
 
+def _rates(rest, divide):
+    """damping_rates written as the master, with the energy at rest `rest` and the rate's divisor `divide`."""
+    return f'''
+def damping_rates(hs, T):
+    rates = []
+    for h in hs:
+        x, v, N = x_taut + pluck, np.zeros_like(x_taut), round(T / h)
+        E0 = taut_energy(x, v) - {rest}
+        for _ in range(N):
+            x, v = implicit_step(x, v, h, m_taut, ij_taut, k_taut, L0_taut, 0.0, free_taut)
+        rates.append(-np.log((taut_energy(x, v) - {rest}) / E0) / ({divide}))
+    return np.array(rates)
+'''
+
+
 _SYSTEM = '''    A = np.diag(np.repeat(m, 2)) - h**2 * K
     b = h * (F.ravel() + h * K @ v.ravel())'''
 
@@ -187,17 +202,7 @@ def largest_strain(h, T, kick):
     # The decay rate of the energy read as if it were the amplitude's: no 1/2.
     "damping_rate_without_the_half": {
         "culprit": "damping_rates",
-        "replace": {"damping_rates": '''
-def damping_rates(hs, T):
-    rates = []
-    for h in hs:
-        x, v, N = x_taut + pluck, np.zeros_like(x_taut), round(T / h)
-        E0 = taut_energy(x, v) - E_rest
-        for _ in range(N):
-            x, v = implicit_step(x, v, h, m_taut, ij_taut, k_taut, L0_taut, 0.0, free_taut)
-        rates.append(-np.log((taut_energy(x, v) - E_rest) / E0) / (N * h))
-    return np.array(rates)
-'''},
+        "replace": {"damping_rates": _rates(rest="E_rest", divide="N * h")},
         "fails": {DAMPING[0]: "your result matches -ln(E_N / E_0) / (N h), without the 1/2",
                   DAMPING[1]: "without the 1/2"},
         "passes": JACOBIAN + STIFFNESS + STEP + STRAIN,
@@ -205,17 +210,7 @@ def damping_rates(hs, T):
     # The whole energy, the taut string's own included: its springs are stretched at rest, so the ratio hardly moves.
     "damping_rate_of_the_whole_energy": {
         "culprit": "damping_rates",
-        "replace": {"damping_rates": '''
-def damping_rates(hs, T):
-    rates = []
-    for h in hs:
-        x, v, N = x_taut + pluck, np.zeros_like(x_taut), round(T / h)
-        E0 = taut_energy(x, v)
-        for _ in range(N):
-            x, v = implicit_step(x, v, h, m_taut, ij_taut, k_taut, L0_taut, 0.0, free_taut)
-        rates.append(-np.log(taut_energy(x, v) / E0) / (2 * N * h))
-    return np.array(rates)
-'''},
+        "replace": {"damping_rates": _rates(rest="0.0", divide="2 * N * h")},
         "fails": {DAMPING[0]: "your result matches the rate of the whole energy, E_rest included: subtract the energy "
                               "of the taut string at rest"},
         "passes": JACOBIAN + STIFFNESS + STEP + STRAIN,
