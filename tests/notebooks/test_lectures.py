@@ -43,11 +43,11 @@ APPENDIX_COVERS = {
 EXERCISES = {
     "01": ["01_integrator_order"],
     "02": ["02_stiffness"],
-    "03": ["01_integrator_order"],
+    "03": ["07_contact", "01_integrator_order"],
     "04": ["00_warmup"],
     "05": ["00_warmup"],
     "06": ["03_provot"],
-    "07": ["02_stiffness", "03_provot", "04_discretization"],
+    "07": ["02_stiffness", "06_implicit_step", "03_provot", "04_discretization"],
     "08": ["05_xpbd", "03_provot"],
     "09": ["03_provot"],
 }
