@@ -32,6 +32,7 @@ from ..results.records import SessionRecord, SubmissionRecord, TestRecord
 from ..results.signing import TOKEN_FD, read_records
 from ..walls import isolation as isolation_module
 from ..walls.limits import check_limit
+from ..walls.syscalls import PARENT_VARIABLE
 from ..worker.process import library_parent
 from .discovery import notebook_digest, written_answers
 from .versions import tests_version
@@ -63,6 +64,7 @@ def _environment(root):
     parent = library_parent()
     env["PYTHONPATH"] = parent + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     env["PARTICLES_COURSE_ROOT"] = str(root)
+    env[PARENT_VARIABLE] = str(os.getpid())  # the session dies with this process (a cluster's worker killed)
     # the sessions' bytecode lives in a folder only the grader may write, never in the library's __pycache__
     env["PYTHONPYCACHEPREFIX"] = str(_private_folder("particles-grader-pycache"))
     # only the grader's plugin (named with -p): a plugin installed beside pytest would change the sessions

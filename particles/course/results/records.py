@@ -313,6 +313,9 @@ class SubmissionRecord(_HoldsTests):
         :func:`particles.course.grading.deadlines.decide`.
     tests_version : str
         Digest of the exercise's tests that graded this record (a changed test regrades what it affects).
+    worker : str
+        The machine that graded it, when a grading cluster did (its host, worker name and address; "" on the
+        driver's own machine); ``isolation`` says the walls it had.
 
     Notes
     -----
@@ -340,6 +343,7 @@ class SubmissionRecord(_HoldsTests):
     written: list = field(default_factory=list)
     late: dict | None = None
     tests_version: str = ""
+    worker: str = ""
 
     @property
     def score(self):
