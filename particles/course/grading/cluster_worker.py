@@ -40,7 +40,9 @@ from .plan import Batch
 from .run import SessionSettings, run_batch
 from .versions import library_digest, tests_version
 
-__all__ = ["GraderWorker", "Grader", "check_in", "grade_task", "lacking", "ISOLATION_VARIABLE"]
+__all__ = ["GraderWorker", "Grader", "check_in", "grade_task", "check_versions", "task_walls", "write_notebooks",
+           "lacking",
+           "ISOLATION_VARIABLE"]
 
 ISOLATION_VARIABLE = "PARTICLES_GRADER_ISOLATION"
 """The environment variable of a grading worker's walls: ``auto`` (default) or ``strict``."""
@@ -141,18 +143,18 @@ class GraderWorker(Worker):
         super().__init__(*args, **kwargs)
 
     async def start_unsafe(self):
+        self.grader = check_in()
         isolation_module.protect_this_process()
         if threading.current_thread() is threading.main_thread():
             # a terminal's Ctrl-C reaches the whole process group: the driver (or ``dask worker``'s nanny) stops
             # its workers, and their sessions die with them; neither stops half-way on its own
             signal.signal(signal.SIGINT, signal.SIG_IGN)
-        self.grader = check_in()
         logger.info("particles grader on %s: course %s, walls %s (%s), library %s", self.grader.host,
                     self.grader.root, self.grader.plan.to_option(), self.grader.mode, self.grader.library)
         return await super().start_unsafe()
 
 
-def _check_versions(grader, task, name):
+def check_versions(grader, task, name):
     """Refuse `task` when this machine would grade its exercise with other tests, library or course files."""
     exercise = task["exercise"]
     if exercise not in exercise_tests(grader.root):
@@ -169,7 +171,7 @@ def _check_versions(grader, task, name):
                           "driver's course folder, then grade again with --resume")
 
 
-def _walls(grader, task, name):
+def task_walls(grader, task, name):
     """The walls of this task's sessions: those it asks for, as far as this machine allows (strict: refused
     without namespaces)."""
     options = task["options"]
@@ -180,7 +182,7 @@ def _walls(grader, task, name):
     return plan
 
 
-def _write_notebooks(task, folder, name):
+def write_notebooks(task, folder, name):
     """The task's notebooks written to `folder`, each checked against its digest; their units."""
     units = []
     for k, notebook in enumerate(task["notebooks"]):
@@ -215,12 +217,12 @@ def grade_task(task):
     if grader is None:
         raise TaskRefused(f"{name} is not a grading worker (start it with particles grade-worker)")
     task = read_task(task)
-    _check_versions(grader, task, name)
-    plan = _walls(grader, task, name)
+    check_versions(grader, task, name)
+    plan = task_walls(grader, task, name)
     before = isolation_module.library_checksum()
     folder = Path(tempfile.mkdtemp(prefix="particles-task-"))  # mode 0700: this uid's alone
     try:
-        units = _write_notebooks(task, folder, name)
+        units = write_notebooks(task, folder, name)
         options = task["options"]
         settings = SessionSettings(root=grader.root, plan=plan, private=(str(folder),),
                                    logs=folder / "logs" if task["logs"] else None,

@@ -40,10 +40,12 @@ def normal(record):
 
 
 def folder_records(out):
-    """``(student, exercise) -> normal record`` of an output folder's ``records/``."""
+    """``(student, exercise) -> normal record`` of an output folder's ``records/`` (without the options the
+    folder keeps beside each record)."""
     found = {}
     for path in sorted((Path(out) / "records").glob("*.json")):
         data = json.loads(path.read_text())
+        data.pop("options", None)
         found[(data["student"], data["exercise"])] = normal(data)
     return found
 
@@ -92,9 +94,20 @@ def grade_workers(file, log, n=2, root=ROOT, *extra):
 
 
 def graders(client):
-    """The scheduler's grading workers: address -> their process id."""
+    """The addresses of the scheduler's grading workers."""
     from particles.course.grading.cluster_tasks import RESOURCE
 
     workers = client.scheduler_info()["workers"]
-    addresses = [a for a, w in workers.items() if RESOURCE in (w.get("resources") or {})]
-    return client.run(os.getpid, workers=addresses) if addresses else {}
+    return sorted(a for a, w in workers.items() if RESOURCE in (w.get("resources") or {}))
+
+
+def worker_processes(process):
+    """The worker processes `dask worker` (started by :func:`grade_workers`) runs, as :mod:`psutil` processes.
+
+    Found from the operating system, never by asking the workers (``Client.run``): on Python 3.11.7 a call that
+    makes a worker's event loop parse code while its task parses too can fail that task (CPython gh-106905).
+    """
+    import psutil
+
+    return [child for child in psutil.Process(process.pid).children()
+            if any("spawn_main" in part for part in child.cmdline())]
