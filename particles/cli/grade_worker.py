@@ -1,4 +1,4 @@
-"""``particles grade-worker ADDRESS``: grading workers joining a Dask cluster (see :mod:`particles.course.grading.cluster`).
+"""``particles grade-worker ADDRESS``: grading workers joining a Dask cluster (:mod:`particles.course.grading.cluster`).
 
 The machine checks itself first (:func:`particles.course.grading.cluster_worker.check_in`: its course
 folder, its walls, the digests of its library and tests) and says what it found; under ``--isolation

@@ -3,10 +3,11 @@
 :class:`ClusterRunner` is a :class:`~particles.course.grading.run.Runner` beside the local pool. Dask's
 ``distributed`` schedules, moves the data and watches the workers; nothing of a scheduler, a queue or a
 worker protocol is ours. ``local:N`` starts an embedded ``LocalCluster`` of N worker processes (one thread
-each, bound to 127.0.0.1, no dashboard); a ``tcp://`` or ``tls://`` address, or a scheduler file, joins a
-running cluster, whose workers are :class:`~particles.course.grading.cluster_worker.GraderWorker` s
-(``particles grade-worker``). Off this machine the scheduler must be a ``tls://`` address with the
-certificates in Dask's settings: Dask pickles its messages, and student code runs on the workers.
+each, bound to 127.0.0.1, no dashboard, TLS with a key made for the run); a ``tcp://`` or ``tls://``
+address, or a scheduler file, joins a running cluster, whose workers are
+:class:`~particles.course.grading.cluster_worker.GraderWorker` s (``particles grade-worker``). Off this
+machine the scheduler must be a ``tls://`` address with the certificates in Dask's settings: Dask pickles
+its messages, and student code runs on the workers.
 
 Each batch becomes a task of plain data (:mod:`~particles.course.grading.cluster_tasks`) asking for the
 grading resource, so only grading workers take it, one at a time each. Delivery is at least once and
@@ -50,6 +51,10 @@ __all__ = ["ClusterRunner", "scheduler_address", "check_address", "is_loopback",
 
 WAIT = 120.0
 """Seconds a run waits for a first grading worker to join a running cluster's scheduler."""
+
+WORKER_CONFIG = dask.config.merge(dask.config.config, {"distributed": {"worker": {"profile": {"enabled": False}}}})
+"""Dask's settings of the embedded cluster's workers (also when a nanny starts one again): no statistical
+profiler sampling the thread that only waits for its grading session."""
 
 
 def is_loopback(host):
@@ -162,16 +167,20 @@ class ClusterRunner:
 
     def _start_local(self):
         env = {"PARTICLES_COURSE_ROOT": str(self.root), ISOLATION_VARIABLE: self.isolation}
+        # TLS on loopback too, with a key made for this run: no other process of this machine (another user, a
+        # submission that got out of its walls) can reach the scheduler or its workers, which run as this user
+        security = Security.temporary()
         try:
             with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
                 self.cluster = LocalCluster(n_workers=self.local, threads_per_worker=1, processes=True,
-                                            host="127.0.0.1", dashboard_address=None, env=env,
-                                            worker_class=functools.partial(Nanny, worker_class=GraderWorker),
-                                            silence_logs=logging.CRITICAL,
+                                            host="127.0.0.1", protocol="tls://", security=security,
+                                            dashboard_address=None, env=env, silence_logs=logging.CRITICAL,
+                                            worker_class=functools.partial(Nanny, worker_class=GraderWorker,
+                                                                           config=WORKER_CONFIG),
                                             scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})  # health only
         except Exception as error:  # a worker that refused to join: say why, not Dask's "failed to start"
             raise ClusterError(f"the grading workers of {self.scheduler} did not start: {_reason(error)}") from None
-        self.client = Client(self.cluster)
+        self.client = Client(self.cluster, security=security)
 
     def _join(self):
         address = scheduler_address(self.scheduler, self.scheduler_file)
@@ -239,7 +248,8 @@ class ClusterRunner:
         if error is not None and not isinstance(error, KilledWorker):
             raise error  # a fault of the grader, as a local run raises it
         last = getattr(getattr(error, "last_worker", None), "address", "unknown")
-        why = f"the worker grading it died ({last})" if error is not None else f"the cluster dropped it ({future.status})"
+        why = (f"the worker grading it died ({last})" if error is not None
+               else f"the cluster dropped it ({future.status})")
 
         self.say(f"particles grade: batch {batch.number} of {batch.exercise} ({len(batch.units)} notebook(s)) "
                  f"was lost: {why}")

@@ -139,7 +139,7 @@ def read_result(task, text):
         logs = {str(k): str(v) for k, v in dict(data.get("logs", {})).items()}
     except (TypeError, ValueError, KeyError) as error:
         raise ClusterError(f"a worker's result of batch {task['batch']} could not be read ({error})") from None
-    expected = [(n["student"], task["exercise"], n["sha256"], seed) for n, seed in zip(task["notebooks"], task["seeds"])]
+    expected = delivery_keys(task)
     got = [(r.student, r.exercise, r.notebook_sha256, r.seed) for r in records]
     if data.get("format") != FORMAT or data.get("batch") != task["batch"] or got != expected:
         raise ClusterError(f"a worker's result of batch {task['batch']} ({task['exercise']}) does not hold the "
@@ -149,4 +149,5 @@ def read_result(task, text):
 
 def delivery_keys(task):
     """What makes each notebook of a task the same delivery: ``(student, exercise, sha256, seed)``, in order."""
-    return [(n["student"], task["exercise"], n["sha256"], int(seed)) for n, seed in zip(task["notebooks"], task["seeds"])]
+    return [(n["student"], task["exercise"], n["sha256"], int(seed))
+            for n, seed in zip(task["notebooks"], task["seeds"])]

@@ -108,7 +108,7 @@ def test_a_scheduler_run_records_what_a_local_run_records(subs, local_run, tmp_p
     assert folder_records(out) == folder_records(local_run)
     assert (out / "gradebook.csv").read_text() == (local_run / "gradebook.csv").read_text()
     for student, (record,) in summary["students"].items():
-        assert record.worker.startswith(f"{socket.gethostname()} (worker ") and "tcp://127.0.0.1:" in record.worker
+        assert record.worker.startswith(f"{socket.gethostname()} (worker ") and "tls://127.0.0.1:" in record.worker
         local = json.loads((local_run / "records" / f"{student}__00_warmup.json").read_text())
         assert sorted(record.isolation) == sorted(local["isolation"])
         assert record.sandbox.split(", ")[0] == local["sandbox"].split(", ")[0]  # namespaces, or not, alike
