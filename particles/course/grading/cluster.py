@@ -213,8 +213,8 @@ class ClusterRunner:
     def submit(self, batch, settings):
         self._connect()
         task = make_task(batch, settings, self._versions(settings.root, batch.exercise))
-        future = self.client.submit(grade_task, task, key=f"grade-{batch.exercise}-{batch.number}-{uuid.uuid4().hex}",
-                                    resources={RESOURCE: 1}, pure=False, retries=0)
+        key = f"grade-{batch.exercise}-{batch.number}-{uuid.uuid4().hex}"  # a task sent again is a new one
+        future = self.client.submit(grade_task, task, key=key, resources={RESOURCE: 1}, pure=False, retries=0)
         self.pending[future.key] = (future, batch, task, settings)
         self.queue.add(future)
 
@@ -222,7 +222,10 @@ class ClusterRunner:
         if self.queue is None:
             return
         for future in self.queue:
-            _, batch, task, settings = self.pending.pop(future.key)
+            entry = self.pending.pop(future.key, None)
+            if entry is None:  # the same future again (a result computed twice): delivered already
+                continue
+            _, batch, task, settings = entry
             try:
                 outcome = self._outcome(future, batch, task, settings)
             finally:
@@ -241,6 +244,9 @@ class ClusterRunner:
             keys = delivery_keys(task)
             fresh = [record for record, key in zip(records, keys) if key not in self.delivered]
             self.delivered.update(keys)
+            if len(fresh) < len(records):
+                self.say(f"particles grade: {len(records) - len(fresh)} notebook(s) of batch {batch.number} of "
+                         f"{batch.exercise} delivered again; their first records are kept")
             return Outcome(batch, results=fresh) if fresh else None
         error = future.exception() if future.status == "error" else None
         if isinstance(error, ClusterError):
@@ -250,7 +256,6 @@ class ClusterRunner:
         last = getattr(getattr(error, "last_worker", None), "address", "unknown")
         why = (f"the worker grading it died ({last})" if error is not None
                else f"the cluster dropped it ({future.status})")
-
         self.say(f"particles grade: batch {batch.number} of {batch.exercise} ({len(batch.units)} notebook(s)) "
                  f"was lost: {why}")
         return Outcome(batch, lost=why)

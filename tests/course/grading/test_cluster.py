@@ -152,7 +152,8 @@ def test_a_duplicate_delivery_is_handed_on_once(subs):
 
     unit = Unit("alice", "00_warmup", subs / "alice_00_warmup.ipynb")
     settings = SessionSettings(root=ROOT, plan=plan("auto"), public_only=True)
-    runner = ClusterRunner("local:2", root=ROOT)
+    said = []
+    runner = ClusterRunner("local:2", root=ROOT, say=said.append)
     try:
         for _ in range(2):
             runner.submit(Batch(0, (unit,), (7,)), settings)
@@ -161,5 +162,18 @@ def test_a_duplicate_delivery_is_handed_on_once(subs):
         runner.close()
     (outcome,) = outcomes
     assert outcome.lost is None and [(r.student, r.seed, r.complete) for r in outcome.results] == [("alice", 7, True)]
+    assert said == ["particles grade: 1 notebook(s) of batch 0 of 00_warmup delivered again; their first records "
+                    "are kept"]
     task = cluster_tasks.make_task(Batch(0, (unit,), (7,)), settings, {"tests": "t", "course": "c"})
     assert cluster_tasks.delivery_keys(task) == [("alice", "00_warmup", outcome.results[0].notebook_sha256, 7)]
+
+
+def test_grade_refuses_a_scheduler_off_this_machine_without_tls_before_connecting(subs, monkeypatch, capsys):
+    """`particles grade --scheduler tcp://<another machine>` stops with status 2 and the reason, and never connects."""
+    from particles.cli import main
+    from particles.course.grading import cluster
+
+    monkeypatch.setattr(cluster, "Client", lambda *a, **k: pytest.fail("connected to a scheduler off loopback"))
+    assert main(["grade", str(subs), "--scheduler", "tcp://192.0.2.7:8786", "--root", str(ROOT)]) == 2
+    err = capsys.readouterr().err
+    assert "particles grade: the scheduler tcp://192.0.2.7:8786 is not on this machine" in err

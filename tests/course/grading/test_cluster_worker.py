@@ -209,3 +209,19 @@ def test_a_task_asking_for_more_than_the_worker_has_or_altered_on_the_way_is_ref
     with pytest.raises(TaskRefused, match=f"{notebook} arrived with SHA-256 [0-9a-f]{{64}}, not "
                                           f"{task['notebooks'][0]['sha256']}"):
         cluster_worker.write_notebooks(task, tmp_path, "worker w")
+
+
+def test_grade_worker_refuses_to_join_before_it_starts_any_worker(tmp_path, monkeypatch, capsys):
+    """`particles grade-worker` refuses, with status 2 and the reason, a scheduler off this machine without TLS, an
+    unreadable scheduler file or a course folder without tests, before it becomes a Dask worker."""
+    from particles.cli import main
+
+    monkeypatch.setattr(os, "execve", lambda *a: pytest.fail("started a worker"))
+    assert main(["grade-worker", "tcp://192.0.2.7:8786", "--root", str(ROOT)]) == 2
+    assert "refusing to join: the scheduler tcp://192.0.2.7:8786 is not on this machine" in capsys.readouterr().err
+    assert main(["grade-worker", "--scheduler-file", str(tmp_path / "none.json"), "--root", str(ROOT)]) == 2
+    assert f"cannot read the scheduler's address from {tmp_path / 'none.json'}" in capsys.readouterr().err
+    (tmp_path / "course" / "solutions").mkdir(parents=True)
+    assert main(["grade-worker", "tcp://127.0.0.1:8786", "--root", str(tmp_path / "course")]) == 2
+    assert "refusing to join: no exercise tests in" in capsys.readouterr().err
+    assert main(["grade-worker"]) == 2 and "give the scheduler's ADDRESS or --scheduler-file" in capsys.readouterr().err
