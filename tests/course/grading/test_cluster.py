@@ -18,20 +18,7 @@ from particles.course.grading.driver import grade  # noqa: E402
 from particles.course.grading.options import GradeOptions  # noqa: E402
 from particles.course.grading.record import INCOMPLETE  # noqa: E402
 
-from .helpers import ROOT, SEED, folder_records, wait_for, write_corpus  # noqa: E402
-
-
-@pytest.fixture(scope="module")
-def subs(tmp_path_factory):
-    return write_corpus(tmp_path_factory.mktemp("cluster") / "subs")
-
-
-@pytest.fixture(scope="module")
-def local_run(subs, tmp_path_factory):
-    """The corpus graded on this machine's pool, --jobs 2: the records every cluster run must equal."""
-    out = tmp_path_factory.mktemp("local") / "out"
-    grade([subs], out, jobs=2, seed=SEED, root=ROOT)
-    return out
+from .helpers import ROOT, SEED, folder_records, wait_for  # noqa: E402
 
 
 def test_importing_the_driver_and_the_command_line_loads_no_dask():

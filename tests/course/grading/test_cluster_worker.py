@@ -28,20 +28,7 @@ from particles.course.grading.run import SessionSettings  # noqa: E402
 from particles.course.walls import isolation  # noqa: E402
 
 from .helpers import (ROOT, SEED, folder_records, grade_workers, graders, normal, scheduler, stop,  # noqa: E402
-                      wait_for, worker_processes, write_corpus)
-
-
-@pytest.fixture(scope="module")
-def subs(tmp_path_factory):
-    return write_corpus(tmp_path_factory.mktemp("cluster") / "subs")
-
-
-@pytest.fixture(scope="module")
-def reference(subs, tmp_path_factory):
-    """The corpus graded on this machine's pool, --jobs 2: the records and gradebook a cluster run must give."""
-    out = tmp_path_factory.mktemp("local") / "out"
-    grade([subs], out, jobs=2, seed=SEED, root=ROOT)
-    return out
+                      wait_for, worker_processes)
 
 
 @pytest.fixture(scope="module")
@@ -91,7 +78,7 @@ def _ended(pid):
         return True
 
 
-def test_a_worker_killed_mid_batch_leaves_exactly_one_record_per_notebook(cluster, subs, reference):
+def test_a_worker_killed_mid_batch_leaves_exactly_one_record_per_notebook(cluster, subs, local_run):
     """SIGKILL to a grading worker while its session grades a batch: the session dies with it (no orphan), the batch
     comes back lost and is graded again, and each notebook is saved exactly once, as a local run grades it."""
     file, client, workers = cluster
@@ -110,13 +97,13 @@ def test_a_worker_killed_mid_batch_leaves_exactly_one_record_per_notebook(cluste
     killer.join()
     wait_for(lambda: _ended(killed["session"]), 20, "the end of the killed worker's session")
     assert sorted(recorder.saves) == sorted(set(recorder.saves)) and len(recorder.saves) == 4
-    assert {k: normal(r) for k, r in recorder.current().items()} == folder_records(reference)
+    assert {k: normal(r) for k, r in recorder.current().items()} == folder_records(local_run)
     assert len(summary["students"]) == 4
     assert len(lost) == 1 and "was lost: the worker grading it died (tcp://127.0.0.1:" in lost[0]
     wait_for(lambda: len(graders(client)) == 2, 120, "the nanny's new worker joining")
 
 
-def test_a_killed_driver_resumed_against_the_same_cluster_gives_the_same_gradebook(cluster, subs, reference, tmp_path):
+def test_a_killed_driver_resumed_against_the_same_cluster_gives_the_same_gradebook(cluster, subs, local_run, tmp_path):
     """`particles grade --scheduler-file` killed after its first records, then run again with --resume against the
     same cluster: the gradebook and records are those of an uninterrupted run."""
     file, _, _ = cluster
@@ -132,8 +119,8 @@ def test_a_killed_driver_resumed_against_the_same_cluster_gives_the_same_gradebo
     done = subprocess.run(command + ["--resume"], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert kept == 4 or f"resumed: {kept} record(s)" in done.stdout
-    assert (out / "gradebook.csv").read_text() == (reference / "gradebook.csv").read_text()
-    assert folder_records(out) == folder_records(reference) and not (out / INCOMPLETE).exists()
+    assert (out / "gradebook.csv").read_text() == (local_run / "gradebook.csv").read_text()
+    assert folder_records(out) == folder_records(local_run) and not (out / INCOMPLETE).exists()
 
 
 def _course_with_other_tests(folder):
