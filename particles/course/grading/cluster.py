@@ -206,7 +206,7 @@ class ClusterRunner:
 
     def _versions(self, root, exercise):
         if exercise not in self.versions:
-            self.versions[exercise] = {"tests": tests_version(root, exercise, self.library),
+            self.versions[exercise] = {"tests": tests_version(root, exercise, self.library), "library": self.library,
                                        "course": course_digest(root, exercise)}
         return self.versions[exercise]
 

@@ -4,10 +4,11 @@ A grading cluster (:mod:`~particles.course.grading.cluster`) sends a worker mach
 (:mod:`~particles.course.grading.cluster_worker`) nothing of the driver's objects. A task is a dict of plain
 values (:func:`make_task`): the batch's number and exercise, each notebook's bytes with their SHA-256, its
 student and where it came from, the seeds drawn before submission, the options a session grades with, and
-the versions the driver grades with: the tests' (:func:`~particles.course.grading.versions.tests_version`,
-which holds the library's digest) and the exercise's course files (:func:`course_digest`: its master and
-released notebook, which the sessions read). A worker whose own versions differ refuses the task
-(:class:`TaskRefused`): it is not sent again, since every worker would grade it the same way or refuse it.
+the versions the driver grades with: the library's digest, the tests'
+(:func:`~particles.course.grading.versions.tests_version`) and the exercise's course files
+(:func:`course_digest`: its master and released notebook, which the sessions read). A worker whose own
+versions differ refuses the task (:class:`TaskRefused`): it is not sent again, for that machine must first
+be set up as the driver's is.
 
 The result is JSON text (:func:`make_result`): one record per notebook as
 :meth:`~particles.course.results.records.SubmissionRecord.to_dict` writes it, each naming the machine that
@@ -67,8 +68,8 @@ def make_task(batch, settings, versions):
     settings : particles.course.grading.run.SessionSettings
         The run's settings: the options and walls the task asks for (its paths stay on the driver).
     versions : dict
-        ``tests`` (the exercise's tests version, with the library's digest) and ``course``
-        (:func:`course_digest`), as the driver grades.
+        ``tests`` (the exercise's tests version, with the library's digest), ``library`` (the library's digest)
+        and ``course`` (:func:`course_digest`), as the driver grades.
 
     Returns
     -------
@@ -91,7 +92,8 @@ def make_task(batch, settings, versions):
 def read_task(task):
     """Check the layout of a task a worker received; returns it (raises :class:`TaskRefused` when it is not one)."""
     keys = {"format", "batch", "exercise", "versions", "notebooks", "seeds", "options", "logs"}
-    if not isinstance(task, dict) or not keys <= set(task) or task["format"] != FORMAT:
+    if (not isinstance(task, dict) or not keys <= set(task) or task["format"] != FORMAT
+            or not {"tests", "library", "course"} <= set(task["versions"])):
         raise TaskRefused(f"not a grading task of layout {FORMAT} (a driver of another version of particles?)")
     if len(task["notebooks"]) != len(task["seeds"]) or not task["notebooks"]:
         raise TaskRefused("a grading task needs one seed per notebook")

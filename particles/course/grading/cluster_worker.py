@@ -160,7 +160,12 @@ def check_versions(grader, task, name):
     if exercise not in exercise_tests(grader.root):
         raise TaskRefused(f"{name} refuses batch {task['batch']}: it has no tests of exercise {exercise!r} in "
                           f"{grader.root}")
-    mine, theirs = tests_version(grader.root, exercise), task["versions"]["tests"]
+    library = library_digest()
+    if library != task["versions"]["library"]:
+        raise TaskRefused(f"{name} refuses batch {task['batch']} of {exercise}: its library is particles {library}, "
+                          f"the driver's particles {task['versions']['library']}; install the driver's particles "
+                          "on that machine, or stop it, then grade again with --resume")
+    mine, theirs = tests_version(grader.root, exercise, library), task["versions"]["tests"]
     if mine != theirs:
         raise TaskRefused(f"{name} refuses batch {task['batch']} of {exercise}: it would grade with tests version "
                           f"{mine}, the driver grades with {theirs}; give that machine the driver's course "

@@ -72,7 +72,7 @@ def test_a_result_that_is_not_its_tasks_records_is_refused(subs, local_run):
     students = ("alice_00_warmup", "bob_00_warmup")
     units = tuple(Unit(s, "00_warmup", subs / f"{s}.ipynb") for s in students)
     task = cluster_tasks.make_task(Batch(3, units, (5, 6)), SessionSettings(root=ROOT, plan=Plan()),
-                                   {"tests": "t", "course": "c"})
+                                   {"tests": "t", "library": "l", "course": "c"})
     alice, bob = (SubmissionRecord.from_dict(json.loads((local_run / "records" / f"{s}__00_warmup.json").read_text()))
                   for s in students)
     alice.seed, bob.seed = 5, 6
@@ -151,7 +151,7 @@ def test_a_duplicate_delivery_is_handed_on_once(subs):
     assert outcome.lost is None and [(r.student, r.seed, r.complete) for r in outcome.results] == [("alice", 7, True)]
     assert said == ["particles grade: 1 notebook(s) of batch 0 of 00_warmup delivered again; their first records "
                     "are kept"]
-    task = cluster_tasks.make_task(Batch(0, (unit,), (7,)), settings, {"tests": "t", "course": "c"})
+    task = cluster_tasks.make_task(Batch(0, (unit,), (7,)), settings, {"tests": "t", "library": "l", "course": "c"})
     assert cluster_tasks.delivery_keys(task) == [("alice", "00_warmup", outcome.results[0].notebook_sha256, 7)]
 
 

@@ -3,6 +3,7 @@ a worker killed mid-batch, a driver killed and resumed, and the workers' refusal
 
 import asyncio
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -179,13 +180,18 @@ def test_a_machine_with_weaker_walls_refuses_to_join_under_strict(monkeypatch):
 
 
 def test_a_task_asking_for_more_than_the_worker_has_or_altered_on_the_way_is_refused(monkeypatch, tmp_path):
-    """A worker that joined under auto without namespaces refuses a strict run's task, naming what it lacks; a
-    notebook whose bytes do not match their digest is refused; either without grading anything."""
+    """A worker refuses a task of another library, naming both; one that joined under auto without namespaces
+    refuses a strict run's task, naming what it lacks; a notebook whose bytes do not match their digest is
+    refused; all before grading anything."""
     notebook = tmp_path / "alice.ipynb"
     notebook.write_text((ROOT / "solutions" / "00_warmup.ipynb").read_text())
     strict = isolation.Plan(namespaces=True, separate_uid=True, landlock=True, mode="strict")
     task = make_task(Batch(4, (Unit("alice", "00_warmup", notebook),), (1,)), SessionSettings(root=ROOT, plan=strict),
-                     {"tests": "t", "course": "c"})
+                     {"tests": "t", "library": "0.0.1+000000000000", "course": "c"})
+    mine = check_in(ROOT, "auto").library
+    with pytest.raises(TaskRefused, match=rf"worker w refuses batch 4 of 00_warmup: its library is particles "
+                                          rf"{re.escape(mine)}, the driver's particles 0.0.1\+000000000000; install"):
+        cluster_worker.check_versions(check_in(ROOT, "auto"), task, "worker w")
     found = dict(isolation.probe(), namespaces=False, namespaces_why="no bwrap (test)")
     monkeypatch.setattr(isolation, "probe", lambda: found)
     grader = check_in(ROOT, "auto")
