@@ -87,10 +87,17 @@ def scheduler(folder):
     return process, file
 
 
-def grade_workers(file, log, n=2, root=ROOT, *extra):
+def grade_workers(file, log, n=2):
     """``particles grade-worker`` with `n` worker processes joining the scheduler of `file`."""
     return start([sys.executable, "-m", "particles", "grade-worker", "--scheduler-file", str(file), "--nworkers",
-                  str(n), "--root", str(root), *extra], log)
+                  str(n), "--root", str(ROOT)], log)
+
+
+def dask_worker(file, log, root=ROOT):
+    """Dask's own ``dask worker`` with the documented flags of a grading worker (the route of dask-jobqueue)."""
+    return start([sys.executable, "-m", "distributed.cli.dask_worker", "--scheduler-file", str(file), "--nthreads", "1",
+                  "--no-dashboard", "--host", "127.0.0.1", "--worker-class",
+                  "particles.course.grading.cluster_worker.GraderWorker"], log, env={"PARTICLES_COURSE_ROOT": str(root)})
 
 
 def graders(client):

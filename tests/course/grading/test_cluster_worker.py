@@ -28,8 +28,8 @@ from particles.course.grading.record import INCOMPLETE, MemoryRecorder  # noqa: 
 from particles.course.grading.run import SessionSettings  # noqa: E402
 from particles.course.walls import isolation  # noqa: E402
 
-from .helpers import (ROOT, SEED, folder_records, grade_workers, graders, normal, scheduler, stop,  # noqa: E402
-                      wait_for, worker_processes)
+from .helpers import (ROOT, SEED, dask_worker, folder_records, grade_workers, graders, normal,  # noqa: E402
+                      scheduler, stop, wait_for, worker_processes)
 
 
 @pytest.fixture(scope="module")
@@ -135,10 +135,11 @@ def _course_with_other_tests(folder):
 
 
 def test_a_worker_with_another_tests_version_is_refused_with_a_clear_error(subs, tmp_path):
-    """A grading worker whose course folder has other tests of the exercise refuses its batch, which is not sent
-    again: the run stops (status 2) naming the worker and both versions, and no record is saved."""
+    """A grading worker (started by `dask worker` with the documented flags) whose course folder has other tests of
+    the exercise refuses its batch, which is not sent again: the run stops (status 2) naming the worker and both
+    versions, and no record is saved."""
     process, file = scheduler(tmp_path)
-    workers = grade_workers(file, tmp_path / "worker.log", 1, _course_with_other_tests(tmp_path / "course"))
+    workers = dask_worker(file, tmp_path / "worker.log", _course_with_other_tests(tmp_path / "course"))
     try:
         out = tmp_path / "out"
         done = subprocess.run([sys.executable, "-m", "particles", "grade", str(subs), "--out", str(out), "--seed",
