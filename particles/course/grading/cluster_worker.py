@@ -213,8 +213,9 @@ def grade_task(task):
     ------
     TaskRefused
         This worker is not a grader, its versions differ from the task's, its walls are weaker than
-        required, a notebook's bytes do not match their digest, or its library changed while it graded
-        (the records are then dropped).
+        required, or a notebook's bytes do not match their digest.
+    ClusterError
+        Its library changed while it graded (the records are dropped).
     """
     worker = get_worker()
     grader = getattr(worker, "grader", None)
