@@ -10,7 +10,8 @@ machine the scheduler must be a ``tls://`` address with the certificates in Dask
 its messages, and student code runs on the workers.
 
 Each batch becomes a task of plain data (:mod:`~particles.course.grading.cluster_tasks`) asking for the
-grading resource, so only grading workers take it, one at a time each. Delivery is at least once and
+grading resource, so only grading workers take it, one at a time each; the runner sends one per grading
+worker and keeps the others, in the plan's order, until one is free. Delivery is at least once and
 records exactly once:
 
 * a result is read once, checked against its task, and released, so that Dask does not compute it again
@@ -27,6 +28,7 @@ records exactly once:
 embedded cluster ends with the run, and its workers' sessions with them.
 """
 
+import collections
 import functools
 import ipaddress
 import json
@@ -148,7 +150,8 @@ class ClusterRunner:
         self.wait = wait
         self.local = int(scheduler.split(":", 1)[1]) if scheduler and scheduler.startswith("local:") else None
         self.cluster = self.client = self.queue = None
-        self.pending, self.delivered, self.versions, self.graders = {}, set(), {}, 0
+        self.pending, self.delivered, self.versions, self.graders, self.counted = {}, set(), {}, 0, 0.0
+        self.waiting = collections.deque()
 
     @property
     def slots(self):
@@ -191,18 +194,31 @@ class ClusterRunner:
             self.client = Client(address, security=security if address.startswith("tls://") else None)
         except (OSError, TimeoutError) as error:
             raise ClusterError(f"cannot reach the scheduler at {address} ({error})") from None
-        deadline = time.monotonic() + self.wait
-        while True:
-            workers = self.client.scheduler_info()["workers"].values()
-            self.graders = sum(1 for w in workers if RESOURCE in (w.get("resources") or {}))
-            if self.graders or time.monotonic() > deadline:
-                break
+        deadline, others = time.monotonic() + self.wait, self._count()
+        while not self.graders and time.monotonic() < deadline:
             time.sleep(0.5)
+            others = self._count()
         if not self.graders:
             self.client.close()
             self.client = None
             raise ClusterError(f"no grading worker joined the scheduler at {address} within {self.wait:g} s (it has "
-                               f"{len(workers)} other worker(s)); start them with: particles grade-worker {address}")
+                               f"{others} other worker(s)); start them with: particles grade-worker {address}")
+
+    def _count(self):
+        """Count the scheduler's grading workers (:attr:`graders`); returns how many workers it has in all."""
+        workers = list(self.client.scheduler_info()["workers"].values())
+        self.graders = sum(1 for w in workers if RESOURCE in (w.get("resources") or {}))
+        self.counted = time.monotonic()
+        return len(workers)
+
+    def _capacity(self):
+        """Tasks the cluster is given at once: one per grading worker (a running cluster's counted again, at most
+        every few seconds, as workers join or leave), at least one."""
+        if self.local is not None:
+            return self.local
+        if time.monotonic() - self.counted > 2.0:
+            self._count()
+        return max(1, self.graders)
 
     def _versions(self, root, exercise):
         if exercise not in self.versions:
@@ -212,16 +228,27 @@ class ClusterRunner:
 
     def submit(self, batch, settings):
         self._connect()
-        task = make_task(batch, settings, self._versions(settings.root, batch.exercise))
-        key = f"grade-{batch.exercise}-{batch.number}-{uuid.uuid4().hex}"  # a task sent again is a new one
-        future = self.client.submit(grade_task, task, key=key, resources={RESOURCE: 1}, pure=False, retries=0)
-        self.pending[future.key] = (future, batch, task, settings)
-        self.queue.add(future)
+        self.waiting.append((batch, settings))
+        self._feed()
+
+    def _feed(self):
+        """Send waiting batches, in their order, while a grading worker is free for each.
+
+        The run keeps the queue: Dask would place every task on a worker when it is sent, before knowing how
+        long any takes, and the large batches the plan puts first could end up last on a busy worker.
+        """
+        while self.waiting and len(self.pending) < self._capacity():
+            batch, settings = self.waiting.popleft()
+            task = make_task(batch, settings, self._versions(settings.root, batch.exercise))
+            key = f"grade-{batch.exercise}-{batch.number}-{uuid.uuid4().hex}"  # a task sent again is a new one
+            future = self.client.submit(grade_task, task, key=key, resources={RESOURCE: 1}, pure=False, retries=0)
+            self.pending[future.key] = (future, batch, task, settings)
+            self.queue.add(future)
 
     def completed(self):
-        if self.queue is None:
-            return
-        for future in self.queue:
+        while self.pending or self.waiting:
+            self._feed()
+            future = next(self.queue)
             entry = self.pending.pop(future.key, None)
             if entry is None:  # the same future again (a result computed twice): delivered already
                 continue
@@ -266,6 +293,7 @@ class ClusterRunner:
         if cancel and self.pending:
             self.client.cancel([future for future, *_ in self.pending.values()], force=True)
         self.pending.clear()
+        self.waiting.clear()
         self.client.close()
         if self.cluster is not None:
             self.cluster.close()
