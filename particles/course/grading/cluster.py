@@ -54,9 +54,17 @@ __all__ = ["ClusterRunner", "scheduler_address", "check_address", "is_loopback",
 WAIT = 120.0
 """Seconds a run waits for a first grading worker to join a running cluster's scheduler."""
 
-WORKER_CONFIG = dask.config.merge(dask.config.config, {"distributed": {"worker": {"profile": {"enabled": False}}}})
-"""Dask's settings of the embedded cluster's workers (also when a nanny starts one again): no statistical
-profiler sampling the thread that only waits for its grading session."""
+QUIET = {"distributed.admin.tick.interval": "500ms", "distributed.admin.system-monitor.interval": "5s",
+         "distributed.admin.system-monitor.gil.enabled": False, "distributed.scheduler.work-stealing": False,
+         "distributed.scheduler.allowed-failures": 0, "distributed.worker.profile.enabled": False,
+         "distributed.worker.memory.monitor-interval": "1s"}
+"""Dask's settings of the embedded cluster: its processes wait for grading sessions, so they check their event
+loops, the machine and their memory seldom, sample no profile, steal no work (the runner keeps the queue)
+and let a task be tried once (a lost one comes back to the run, which sends it again)."""
+
+with dask.config.set(QUIET):
+    WORKER_CONFIG = dask.config.merge(dask.config.config)
+"""The whole of Dask's settings a nanny gives the workers it starts, also when it starts one again."""
 
 
 def is_loopback(host):
@@ -174,7 +182,7 @@ class ClusterRunner:
         # submission that got out of its walls) can reach the scheduler or its workers, which run as this user
         security = Security.temporary()
         try:
-            with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+            with dask.config.set(QUIET):
                 self.cluster = LocalCluster(n_workers=self.local, threads_per_worker=1, processes=True,
                                             host="127.0.0.1", protocol="tls://", security=security,
                                             dashboard_address=None, env=env, silence_logs=logging.CRITICAL,
