@@ -7,8 +7,8 @@ and its records back. The overhead per notebook is the difference of the two tim
 The corpus is made from the course's own masters, without the tests' corpora: for each exercise the master,
 its released stub, and the master with one solution cell left undone (released alone), each ``--copies``
 times under other student names: about 16 notebooks per exercise with ``--copies 2``, like the exercise
-corpora of ``tests/course/grader``. The machine is shared: the settings are interleaved and the best of
-``--repeat`` runs of each is kept.
+corpora of ``tests/course/grader``. The machine is shared: the settings are interleaved, in turns of
+alternating order, and the best of ``--repeat`` runs of each is kept.
 
 Run: .venv/bin/python bench/bench_cluster.py [--copies 2] [--repeat 2] [--exercise 00_warmup]
 """
@@ -78,8 +78,9 @@ def main():
         print(f"{n} notebooks of {len(exercises)} exercise(s), best of {args.repeat} interleaved runs; load average "
               f"before: {os.getloadavg()[0]:.2f}", flush=True)
         best = {name: float("inf") for name in settings}
-        for run in range(args.repeat):  # interleaved, so that a burst of load elsewhere hits both settings
-            for name, options in settings.items():
+        for run in range(args.repeat):  # interleaved, every other run in the other order: load that rises or
+            order = list(settings.items())  # falls during a run hits both settings alike
+            for name, options in order if run % 2 == 0 else order[::-1]:
                 start = time.perf_counter()
                 summary = grade([Path(tmp) / "subs"], None, seed=1, time_limit=10.0, root=ROOT, **options)
                 seconds = time.perf_counter() - start
