@@ -12,6 +12,7 @@ Modules:
 * ``check.py``: ``particles check``, an exercise's public tests on a saved notebook;
 * ``release.py``: ``particles release``, the exercises generated from their masters;
 * ``grade.py``: ``particles grade``, the autograder;
+* ``grade_worker.py``: ``particles grade-worker``, grading workers joining a Dask cluster;
 * ``review.py``: ``particles review``, the written answers' pages and rubrics;
 * ``new_exercise.py``: ``particles new-exercise``, a template master and test module;
 * ``export.py``: ``particles export``, the grades and the feedback zips for Canvas and Moodle;
@@ -28,12 +29,12 @@ Each verb module has ``register(commands)``, which adds its parser to the ``argp
 import argparse
 import sys
 
-from . import (check, demo, export, grade, gradescope_bundle, new_exercise, record, release, review, similarity,
-               site, study, tour, warm)
+from . import (check, demo, export, grade, grade_worker, gradescope_bundle, new_exercise, record, release, review,
+               similarity, site, study, tour, warm)
 
 __all__ = ["main", "build_parser", "VERBS"]
 
-VERBS = (tour, demo, study, warm, site, check, release, grade, review, new_exercise, export, record,
+VERBS = (tour, demo, study, warm, site, check, release, grade, grade_worker, review, new_exercise, export, record,
          gradescope_bundle, similarity)
 """The verbs' modules, in the order ``particles --help`` lists them."""
 

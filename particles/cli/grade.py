@@ -16,7 +16,7 @@ def options(args):
         root=course_root(args), private=tuple(args.private), hidden_visibility=args.hidden_visibility,
         gradescope=args.gradescope, isolation=args.isolation, resume=args.resume, rubric=tuple(args.rubric),
         course=args.course, times=args.times, times_from=args.times_from, roster=args.roster,
-        metadata=args.metadata, students=args.student)
+        metadata=args.metadata, students=args.student, scheduler=args.scheduler, scheduler_file=args.scheduler_file)
 
 
 def progress(result):
@@ -76,6 +76,7 @@ def report(args, summary):
 
 
 def run(args):
+    from ..course.grading.cluster_tasks import ClusterError
     from ..course.grading.driver import GradingInterrupted, LibraryChanged, run_grading
     from ..course.walls.isolation import IsolationUnavailable
 
@@ -84,12 +85,16 @@ def run(args):
     except GradingInterrupted as stopped:  # Ctrl-C: one line, the record consistent
         print(f"particles grade: {stopped}", file=sys.stderr)
         return 130
-    except (ValueError, IsolationUnavailable) as error:
+    except (ValueError, IsolationUnavailable, ClusterError) as error:
         print(f"particles grade: {error}", file=sys.stderr)
         return 2
     except LibraryChanged as error:
         print(f"particles grade: GRADING FAILED: {error}", file=sys.stderr)
         return 3
+    except KeyboardInterrupt:  # the batches not finished are dropped (on a cluster: cancelled); records are kept
+        print("particles grade: interrupted; the records made so far are kept: run the same command with "
+              "--resume to grade the rest", file=sys.stderr)
+        return 130
     return report(args, summary)
 
 
@@ -133,4 +138,10 @@ def register(commands):
     grade.add_argument("--student", action="append", metavar="ID",
                        help="regrade only this student (repeatable); needs --out with the records of an earlier "
                             "run, keeps the others' and rewrites the gradebook")
+    grade.add_argument("--scheduler", metavar="ADDRESS",
+                       help="grade on a Dask cluster (pip install 'particles[cluster]'): local:N for N worker "
+                            "processes on this machine, or a running scheduler's tcp://HOST:PORT (this machine "
+                            "only) or tls://HOST:PORT, whose workers run particles grade-worker")
+    grade.add_argument("--scheduler-file", metavar="FILE",
+                       help="grade on the Dask cluster of this scheduler file (dask scheduler --scheduler-file)")
     grade.set_defaults(run=run)

@@ -8,6 +8,12 @@ Modules:
 * :mod:`~particles.course.grading.plan`: the batches of a run and each notebook's seed;
 * :mod:`~particles.course.grading.run`: where batches are graded (a runner: this machine's cores), a
   lost batch retried;
+* :mod:`~particles.course.grading.cluster`: the runner on a Dask cluster (``--scheduler``): an embedded
+  ``LocalCluster`` or a running scheduler, each result delivered once;
+* :mod:`~particles.course.grading.cluster_worker`: a cluster's grading worker: its checks before it joins,
+  and the task it grades;
+* :mod:`~particles.course.grading.cluster_tasks`: a cluster's tasks and results as plain data, checked on
+  both sides;
 * :mod:`~particles.course.grading.session`: one pytest session grading a batch; its signed records
   read back;
 * :mod:`~particles.course.grading.record`: each result decided, saved (a recorder: the records

@@ -9,8 +9,8 @@ A grading run is a pipeline of stages, each in its own module, strung together b
    of the written answers checked against them (:mod:`particles.course.results.rubric`);
 3. **plan** the batches and draw each notebook's seed (:mod:`~particles.course.grading.plan`);
 4. **run** the batches, on this machine or elsewhere (:mod:`~particles.course.grading.run`: a
-   :class:`~particles.course.grading.run.Runner`), each a pytest session
-   (:mod:`~particles.course.grading.session`);
+   :class:`~particles.course.grading.run.Runner`; :mod:`~particles.course.grading.cluster`: a Dask
+   cluster, ``--scheduler``), each a pytest session (:mod:`~particles.course.grading.session`);
 5. **record** each result as it arrives: its late decision made, saved, its student's outputs written
    (:mod:`~particles.course.grading.record`: a :class:`~particles.course.grading.record.Recorder`);
 6. **report**: the gradebook, every student's feedback and Gradescope's file
@@ -91,12 +91,38 @@ def decide_walls(options):
     """The workers' walls (a :class:`~particles.course.walls.isolation.Plan`) and the library's checksum.
 
     This process is protected from its workers first; everything the driver needs is imported by now,
-    so a library file that changes from here on is one the run's submissions changed.
+    so a library file that changes from here on is one the run's submissions changed. On a cluster the
+    plan asks for every layer and each worker grades within the strongest it allows (``strict``: none
+    without namespaces); this machine's own walls do not matter there.
     """
-    plan = (options.isolation if isinstance(options.isolation, isolation_module.Plan)
-            else isolation_module.plan(options.isolation))
+    if isinstance(options.isolation, isolation_module.Plan):
+        plan = options.isolation
+    elif options.cluster:
+        plan = isolation_module.Plan(namespaces=True, separate_uid=True, landlock=True, mode=options.isolation,
+                                     why="each worker of the cluster uses the strongest walls it allows")
+    else:
+        plan = isolation_module.plan(options.isolation)
     isolation_module.protect_this_process()
     return plan, isolation_module.library_checksum()
+
+
+def choose_runner(options):
+    """The run stage: this machine's pool of ``options.jobs``, or a Dask cluster (``options.scheduler``).
+
+    The cluster's modules (and Dask) are imported only for a cluster run, here, before any worker starts.
+    """
+    if not options.cluster:
+        return LocalRunner(options.jobs)
+    try:
+        from .cluster import ClusterRunner
+    except ModuleNotFoundError as error:
+        if error.name not in ("dask", "distributed"):
+            raise
+        raise ValueError(f"scheduler needs Dask's distributed, which is not installed ({error}): "
+                         "pip install 'particles[cluster]'") from None
+
+    mode = options.isolation.mode if isinstance(options.isolation, isolation_module.Plan) else options.isolation
+    return ClusterRunner(options.scheduler, options.scheduler_file, root=options.root, isolation=mode)
 
 
 def session_settings(options, plan, intake):
@@ -205,7 +231,8 @@ def run_grading(options, progress=None, runner=None, recorder=None):
     progress : callable, optional
         Called with each notebook's record as it is made.
     runner : particles.course.grading.run.Runner, optional
-        Where the batches are graded (default: this machine, ``options.jobs`` at a time).
+        Where the batches are graded (default: :func:`choose_runner`'s: this machine, ``options.jobs`` at a
+        time, or the cluster of ``options.scheduler``); its ``slots``, when it has them, size the batches.
     recorder : particles.course.grading.record.Recorder, optional
         Where the records are kept (default: the course record of ``out``, or memory without `out`).
 
@@ -218,6 +245,7 @@ def run_grading(options, progress=None, runner=None, recorder=None):
     # Gradescope's one submission (--metadata) checks only its own names: the course's roster is not needed
     roster_path = options.roster or (course.roster if course is not None and options.metadata is None else None)
     roster = read_roster(roster_path) if roster_path is not None else None
+    runner = runner or choose_runner(options)
     plan, before = decide_walls(options)
     recorder, identity = open_record(options, roster, recorder)
     complete, state = False, {}
@@ -261,8 +289,9 @@ def _stages(options, course, identity, plan, before, recorder, runner, progress,
     todo = resume(options, units, recorder, collect)
     settings = session_settings(options, plan, intake)
     collect_rejected(units, settings, collect, problems)
-    batches = plan_batches(todo, options.jobs, options.seed)                                       # plan
-    run_all(batches, runner or LocalRunner(options.jobs), settings, collect)                      # run, record
+    slots = getattr(runner, "slots", options.jobs) if todo else options.jobs  # a cluster: its workers
+    batches = plan_batches(todo, slots, options.seed)                                              # plan
+    run_all(batches, runner, settings, collect)                                                    # run, record
     kept = sum(1 for u in units if not u.rejected) - len(todo)
     summary = summarize(options.tests, units, collect.done, problems, plan, kept, others)
     changed = isolation_module.library_changes(before)
@@ -301,7 +330,8 @@ def grade(paths, out=None, *, progress=None, runner=None, recorder=None, **optio
         The other fields of :class:`~particles.course.grading.options.GradeOptions`: ``jobs``,
         ``exercise``, ``public_only``, ``seed``, ``time_limit``, ``memory_mb``, ``root``, ``private``,
         ``hidden_visibility``, ``python``, ``gradescope``, ``isolation``, ``resume``, ``audit_hook``,
-        ``rubric``, ``course``, ``times``, ``metadata``, ``students``, ``limits``.
+        ``rubric``, ``course``, ``times``, ``metadata``, ``students``, ``limits``, ``scheduler``,
+        ``scheduler_file``.
 
     Returns
     -------

@@ -5,6 +5,7 @@ builds one from its keyword arguments. Every check of a value the instructor gav
 object is made, so that a run with a bad option stops before anything is read or graded.
 """
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -15,6 +16,9 @@ __all__ = ["GradeOptions", "VISIBILITIES"]
 
 VISIBILITIES = ("hidden", "after_due_date", "after_published", "visible")
 """Gradescope's visibilities of a test."""
+
+SCHEDULER = re.compile(r"local:[1-9][0-9]*|(tcp|tls)://\S+:[0-9]+")
+"""The forms of ``scheduler``: an embedded cluster of N processes, or a running scheduler's address."""
 
 
 def _paths(values):
@@ -83,6 +87,12 @@ class GradeOptions:
         Regrade only these students' notebooks (needs `out` with the records of an earlier run).
     limits : particles.course.grading.intake.Limits, optional
         What a notebook and a zip may hold.
+    scheduler : str, optional
+        Grade on a Dask cluster (:mod:`particles.course.grading.cluster`): ``local:N`` (N worker processes on
+        this machine), ``tcp://HOST:PORT`` or ``tls://HOST:PORT`` (a running scheduler; off this machine only
+        ``tls://``). Default: this machine's pool of `jobs`.
+    scheduler_file : path, optional
+        Dask's scheduler file of a running cluster (instead of `scheduler`).
 
     Attributes
     ----------
@@ -94,7 +104,8 @@ class GradeOptions:
     ValueError
         On a bad value, naming the option: no exercise tests under `root`, an unknown exercise,
         ``jobs < 1``, a limit that is not a finite number > 0, `resume` or `students` without `out`,
-        `students` with `resume`, an unknown visibility, a `times_from` other than ``"mtime"``.
+        `students` with `resume`, an unknown visibility, a `times_from` other than ``"mtime"``, a malformed
+        `scheduler`, `scheduler` with `scheduler_file`, `jobs` or `python`.
     """
 
     paths: tuple
@@ -121,6 +132,8 @@ class GradeOptions:
     metadata: Path = None
     students: tuple = None
     limits: object = None
+    scheduler: str = None
+    scheduler_file: Path = None
     tests: dict = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -152,8 +165,29 @@ class GradeOptions:
         fix("rubric", _paths(self.rubric))
         if self.times_from not in (None, "mtime"):
             raise ValueError(f"times_from must be None or 'mtime', got {self.times_from!r}")
-        for name in ("out", "gradescope", "course", "times", "metadata", "roster"):
+        for name in ("out", "gradescope", "course", "times", "metadata", "roster", "scheduler_file"):
             fix(name, _optional_path(getattr(self, name)))
+        self._check_cluster()
+
+    def _check_cluster(self):
+        """The cluster's options: one scheduler, well formed, and none of this machine's pool."""
+        if self.scheduler is not None and self.scheduler_file is not None:
+            raise ValueError("give scheduler or scheduler_file, not both")
+        if self.scheduler is not None and not SCHEDULER.fullmatch(str(self.scheduler)):
+            raise ValueError(f"scheduler must be local:N (N worker processes on this machine), tcp://HOST:PORT or "
+                             f"tls://HOST:PORT, got {self.scheduler!r}")
+        if self.scheduler_file is not None and not self.scheduler_file.is_file():
+            raise ValueError(f"scheduler_file {self.scheduler_file} does not exist")
+        if self.cluster and self.jobs != 1:
+            raise ValueError("jobs is this machine's pool; with scheduler the cluster's workers grade (local:N for "
+                             "N worker processes here)")
+        if self.cluster and self.python is not None:
+            raise ValueError("python cannot be given with scheduler: each worker grades with its own interpreter")
+
+    @property
+    def cluster(self):
+        """True when a Dask cluster grades the run (`scheduler` or `scheduler_file`)."""
+        return self.scheduler is not None or self.scheduler_file is not None
 
     @property
     def recorded(self):

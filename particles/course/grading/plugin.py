@@ -78,12 +78,12 @@ from ..reading.submission import SubmissionCode, notebook_cells
 from ..reading.provided import provided_cells
 from .figures import Feedback
 from ..walls.isolation import Plan, protect_this_process
-from ..walls.syscalls import die_with_parent
 from ..results.signing import TOKEN_FD, sign_records
 from ..paths import project_root
 from .blame import blame, function_of, stub_functions
 from ..results.records import SessionRecord, TestRecord
 from ..walls.limits import check_limit
+from ..walls.syscalls import PARENT_VARIABLE, die_with_parent
 from ..worker.runner import GradingFailure, Submission
 
 __all__ = ["record_of"]
@@ -144,8 +144,8 @@ def pytest_configure(config):
     config._particles_jobs = jobs
     config._particles_token = _read_token()
     protect_this_process()  # no process of the same uid may read this session's memory or environment
-    if os.environ.get("PARTICLES_GRADER_PID", "").isdigit():  # a session never outlives its driver
-        die_with_parent(int(os.environ["PARTICLES_GRADER_PID"]))
+    if os.environ.get(PARENT_VARIABLE):  # a grading session: it ends with the driver or worker that started it
+        die_with_parent(int(os.environ.pop(PARENT_VARIABLE)))
     config._particles_plan = None
     config._particles_seed = seed
     config._particles_results = {job["id"]: SessionRecord(id=job["id"], seed=job["seed"]) for job in jobs}

@@ -2,7 +2,9 @@
 
 Where the batches run is one small protocol, :class:`Runner`: submit a batch, take the outcomes as they
 complete, close. :class:`LocalRunner` runs them on this machine's cores, ``jobs`` sessions at a time; a
-runner that sends them to other machines implements the same three methods. Whatever runs a batch runs
+runner that sends them to other machines implements the same three methods
+(:class:`~particles.course.grading.cluster.ClusterRunner`: a Dask cluster), and may say how many batches
+it grades at once (``slots``: the run's batches are sized for them). Whatever runs a batch runs
 :func:`run_batch`, the same code everywhere: one pytest session for the batch
 (:func:`particles.course.grading.session.grade_batch`), then each notebook that session did not finish
 in a session of its own.

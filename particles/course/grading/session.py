@@ -34,14 +34,12 @@ from ..results.records import SessionRecord, SubmissionRecord, TestRecord
 from ..results.signing import TOKEN_FD, read_records
 from ..walls import isolation as isolation_module
 from ..walls.limits import check_limit
+from ..walls.syscalls import PARENT_VARIABLE
 from ..worker.process import library_parent
 from .discovery import notebook_digest, written_answers
 from .versions import tests_version
 
-__all__ = ["catalog", "grade_batch", "grade_unit", "rejected_record", "stop_sessions", "STOPPING", "GRADER_PID"]
-
-GRADER_PID = "PARTICLES_GRADER_PID"
-"""The environment variable that gives a grading session its driver's pid."""
+__all__ = ["catalog", "grade_batch", "grade_unit", "rejected_record", "stop_sessions", "STOPPING"]
 
 
 def _private_folder(name):
@@ -68,13 +66,13 @@ def _environment(root):
     parent = library_parent()
     env["PYTHONPATH"] = parent + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     env["PARTICLES_COURSE_ROOT"] = str(root)
+    env[PARENT_VARIABLE] = str(os.getpid())  # the session dies with this process (a cluster's worker killed)
     # the sessions' bytecode lives in a folder only the grader may write, never in the library's __pycache__
     env["PYTHONPYCACHEPREFIX"] = str(_private_folder("particles-grader-pycache"))
     # only the grader's plugin (named with -p): a plugin installed beside pytest would change the sessions
     # (pytest-randomly reorders the tests and reseeds the generators), and loading them (pytest-xdist,
     # platformdirs' own) took a tenth of a session's start
     env["PYTEST_DISABLE_PLUGIN_AUTOLOAD"] = "1"
-    env[GRADER_PID] = str(os.getpid())  # the session dies with this process (the plugin asks the kernel)
     env.pop("PYTHONDONTWRITEBYTECODE", None)
     return env
 

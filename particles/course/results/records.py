@@ -319,6 +319,9 @@ class SubmissionRecord(_HoldsTests):
     run : dict or None
         The grading run that made this record, as the course record keeps it: ``id`` and ``started``
         (:mod:`particles.course.term.database`); None for a record no course record holds.
+    worker : str
+        The machine that graded it, when a grading cluster did (its host, worker name and address; "" on the
+        driver's own machine); ``isolation`` says the walls it had.
 
     Notes
     -----
@@ -347,6 +350,7 @@ class SubmissionRecord(_HoldsTests):
     late: dict | None = None
     tests_version: str = ""
     run: dict | None = None
+    worker: str = ""
 
     @property
     def score(self):

@@ -18,9 +18,10 @@ import sys
 from pathlib import Path
 
 __all__ = ["protect_this_process", "no_new_privs", "landlock_abi", "apply_landlock", "drop_privileges",
-           "drop_capabilities", "become_subreaper", "kill_orphans", "die_with_parent"]
+           "drop_capabilities", "become_subreaper", "kill_orphans", "die_with_parent",
+           "PARENT_VARIABLE"]
 
-_PR_SET_PDEATHSIG, _PR_SET_DUMPABLE, _PR_SET_NO_NEW_PRIVS = 1, 4, 38
+_PR_SET_DUMPABLE, _PR_SET_NO_NEW_PRIVS = 4, 38
 _SYS_CREATE_RULESET, _SYS_ADD_RULE, _SYS_RESTRICT_SELF = 444, 445, 446  # the same on every architecture
 _FS = {"execute": 1 << 0, "write_file": 1 << 1, "read_file": 1 << 2, "read_dir": 1 << 3,
        "remove_dir": 1 << 4, "remove_file": 1 << 5, "make_char": 1 << 6, "make_dir": 1 << 7,
@@ -53,19 +54,6 @@ def protect_this_process():
     Returns True when the kernel accepted it (Linux).
     """
     return _prctl(_PR_SET_DUMPABLE, 0)
-
-
-def die_with_parent(parent):
-    """Ask the kernel to SIGKILL this process when its parent dies (``PR_SET_PDEATHSIG``); True when set.
-
-    `parent` is the pid the parent had: a parent that died before the request is caught too (this process then
-    ends at once). A grading session started by the driver never outlives it.
-    """
-    if not _prctl(_PR_SET_PDEATHSIG, signal.SIGKILL):
-        return False
-    if os.getppid() != parent:
-        os._exit(1)
-    return True
 
 
 def no_new_privs():
@@ -199,6 +187,31 @@ def drop_capabilities():
 
 
 _PR_SET_CHILD_SUBREAPER = 36
+_PR_SET_PDEATHSIG = 1
+
+PARENT_VARIABLE = "PARTICLES_GRADER_PARENT"
+"""Environment variable of a grading session naming the pid of the process that started it
+(:func:`die_with_parent`)."""
+
+
+def die_with_parent(parent):
+    """Have the kernel kill this process (SIGKILL) when its parent ends (Linux); True when set.
+
+    A grading session dies with the process that started it (the driver, or a cluster's worker killed
+    mid-batch), and a worker with its session: no orphan keeps grading. The kernel clears the setting when
+    the process changes its uid, so a worker sets it after that.
+
+    Parameters
+    ----------
+    parent : int
+        The pid the caller knows as its parent: when this process already has another one (the parent
+        ended before the call), it ends now.
+    """
+    if not _prctl(_PR_SET_PDEATHSIG, signal.SIGKILL):
+        return False
+    if os.getppid() != parent:
+        os.kill(os.getpid(), signal.SIGKILL)
+    return True
 
 
 def become_subreaper():
