@@ -1,6 +1,5 @@
 """The run stage on a Dask cluster: the same records as a local run, Ctrl-C, duplicates dropped, addresses checked."""
 
-import json
 import os
 import signal
 import socket
