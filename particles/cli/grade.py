@@ -16,7 +16,8 @@ def options(args):
         root=course_root(args), private=tuple(args.private), hidden_visibility=args.hidden_visibility,
         gradescope=args.gradescope, isolation=args.isolation, resume=args.resume, rubric=tuple(args.rubric),
         course=args.course, times=args.times, times_from=args.times_from, roster=args.roster,
-        metadata=args.metadata, students=args.student, scheduler=args.scheduler, scheduler_file=args.scheduler_file)
+        name_column=args.name_column, metadata=args.metadata, students=args.student, scheduler=args.scheduler,
+        scheduler_file=args.scheduler_file)
 
 
 def progress(result):
@@ -133,6 +134,9 @@ def register(commands):
     grade.add_argument("--roster", metavar="FILE",
                        help="who is in the course: a CSV of students, their LMS identifiers and aliases (default: "
                             "the course file's roster); every name the run meets must be a roster student's")
+    grade.add_argument("--name-column", default="submission_name",
+                       help="the roster's column of the grader's names (default submission_name; Canvas's "
+                            "gradebook export: \"SIS Login ID\")")
     grade.add_argument("--metadata", metavar="FILE",
                        help="Gradescope's submission_metadata.json: its created_at is the submission time")
     grade.add_argument("--student", action="append", metavar="ID",

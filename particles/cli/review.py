@@ -11,7 +11,7 @@ def run(args):
 
     try:
         summary = write_review(args.submissions, args.out, root=course_root(args), exercise=args.exercise,
-                               roster=args.roster)
+                               roster=args.roster, name_column=args.name_column)
     except ValueError as error:  # an unknown exercise, a master's unreadable points, a file in the way
         print(f"particles review: {error}", file=sys.stderr)
         return 2
@@ -44,5 +44,7 @@ def register(commands):
     review.add_argument("--exercise", help="read every notebook as this exercise (as `particles grade` does)")
     review.add_argument("--roster", metavar="FILE", help="who is in the course (default: the course file's roster): "
                         "students named as `particles grade` names them")
+    review.add_argument("--name-column", default="submission_name",
+                        help="the roster's column of the grader's names (default submission_name)")
     add_root(review)
     review.set_defaults(run=run)

@@ -244,7 +244,7 @@ def run_grading(options, progress=None, runner=None, recorder=None):
     course = find_course(options.root, list(options.tests), options.course)                    # read
     # Gradescope's one submission (--metadata) checks only its own names: the course's roster is not needed
     roster_path = options.roster or (course.roster if course is not None and options.metadata is None else None)
-    roster = read_roster(roster_path) if roster_path is not None else None
+    roster = read_roster(roster_path, options.name_column) if roster_path is not None else None
     runner = runner or choose_runner(options)
     plan, before = decide_walls(options)
     recorder, identity = open_record(options, roster, recorder)

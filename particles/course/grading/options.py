@@ -81,6 +81,9 @@ class GradeOptions:
         gives one (by default a deadline without a real submission time stops the run).
     roster : path, optional
         The roster (default: the course file's ``roster``, if any): who is in the course.
+    name_column : str
+        The roster's column of the grader's names of the students (default ``submission_name``; for Canvas's
+        gradebook export, e.g. ``"SIS Login ID"``).
     metadata : path, optional
         Gradescope's ``submission_metadata.json``: its ``created_at`` is the time of every notebook.
     students : sequence of str, optional
@@ -129,6 +132,7 @@ class GradeOptions:
     times: Path = None
     times_from: str = None
     roster: Path = None
+    name_column: str = "submission_name"
     metadata: Path = None
     students: tuple = None
     limits: object = None

@@ -263,7 +263,7 @@ def _rubric(path, exercise, students, points):
     return stream.getvalue(), sum(1 for row in kept.values() if (row.get("points") or row.get("comment")))
 
 
-def write_review(paths, out, *, root=None, exercise=None, roster=None):
+def write_review(paths, out, *, root=None, exercise=None, roster=None, name_column="submission_name"):
     """Write the review pages and the rubrics of the written answers of `paths`.
 
     Parameters
@@ -279,6 +279,8 @@ def write_review(paths, out, *, root=None, exercise=None, roster=None):
     roster : path, optional
         The roster (default: the course file's ``roster``, if any): the students are named as ``particles grade``
         names them, their aliases matched (:mod:`particles.course.term.identity`).
+    name_column : str
+        The roster's column of the grader's names (as ``particles export --name-column``).
 
     Returns
     -------
@@ -299,7 +301,7 @@ def write_review(paths, out, *, root=None, exercise=None, roster=None):
     if roster is None:
         course = find_course(root, list(tests))
         roster = course.roster if course is not None else None
-    identity = read_roster(roster).identity() if roster is not None else None
+    identity = read_roster(roster, name_column).identity() if roster is not None else None
     with tempfile.TemporaryDirectory(prefix="particles-review-") as work:  # zips opened as grade opens them
         return _write_review(paths, Path(out), root, tests, exercise, work, identity)
 

@@ -2,9 +2,7 @@
 
 import pytest
 
-from particles.course.term.identity import Identity, name_key
 from particles.course.term.roster import RosterError, read_roster
-
 
 def roster_file(tmp_path, text, name="roster.csv"):
     path = tmp_path / name
@@ -48,3 +46,26 @@ def test_name_column_that_is_an_identifier(tmp_path):
         read_roster(roster_file(tmp_path, "email,canvas_id,Email address\na@x,1,b@x\n"), name_column="email")
 
 
+
+
+def test_canvas_gradebook_export_with_a_manual_posting_line_is_a_roster_and_its_aliases_match(tmp_path):
+    """Canvas's export of a course with a manually posted assignment has a 'Manual Posting' line (empty name cells)
+    before 'Points Possible': it is skipped like that line; the students are found by login, id and aliases."""
+    text = ("Student,ID,SIS User ID,SIS Login ID,Section,aliases,Quiz 1 (55)\n"
+            ",,,,,,Manual Posting\n"
+            "    Points Possible,,,,,,10\n"
+            "\"Lee, Ann\",101,S-1,alee,A,ann.lee@uni.edu; annie,9\n"
+            "\"Ito, Carl\",102,S-2,cito,A,,7\n")
+    roster = read_roster(roster_file(tmp_path, text), name_column="SIS Login ID")
+    assert [(s.submission_name, s.canvas_id, s.aliases) for s in roster.students] == [
+        ("alee", "101", ("ann.lee@uni.edu", "annie")), ("cito", "102", ())]
+    course = roster.identity()
+    assert course.closed and course.find("Annie").name == "alee" and course.find(canvas_id="102").name == "cito"
+    assert course.find("ANN.LEE@UNI.EDU").name == "alee" and course.find("someone") is None
+
+
+def test_an_alias_that_is_another_students_name_is_refused_naming_the_line(tmp_path):
+    """Two roster lines that share a name through an alias are refused: one name, one student."""
+    text = "submission_name,email,aliases\nann,ann@uni.edu,\nbob,bob@uni.edu,ann@uni.edu\n"
+    with pytest.raises(RosterError, match=r"line 3: 'ann@uni.edu' \(name\) names both ann and bob"):
+        read_roster(roster_file(tmp_path, text))
