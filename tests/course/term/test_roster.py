@@ -4,6 +4,7 @@ import pytest
 
 from particles.course.term.roster import RosterError, read_roster
 
+
 def roster_file(tmp_path, text, name="roster.csv"):
     path = tmp_path / name
     path.write_text(text, encoding="utf-8")
