@@ -418,14 +418,19 @@ def _check_rates(student, feedback, hs, T, call, hidden):
 
 @pytest.mark.points(1)
 def test_damping_rates_public(student, feedback):
-    """damping_rates at h = 5 ms, 20 ms and 0.1 s over 2 s: the reference's energy decay rates."""
-    _check_rates(student, feedback, np.array([0.005, 0.02, 0.1]), 2.0, "damping_rates(hs=[0.005, 0.02, 0.1], T=2)",
+    """damping_rates at h = 5 ms, 20 ms and 0.1 s over 0.5 s: the reference's energy decay rates."""
+    _check_rates(student, feedback, np.array([0.005, 0.02, 0.1]), 0.5, "damping_rates(hs=[0.005, 0.02, 0.1], T=0.5)",
                  False)
 
 
 @pytest.mark.points(2)
 @pytest.mark.hidden
 def test_damping_rates_random(student, rng, feedback):
-    """damping_rates at random steps and duration: the reference's rates, growing like h at small steps."""
+    """damping_rates at random steps and duration: the reference's rates, growing like h at small steps.
+
+    T stays below 0.8 s, where the vibration keeps more than 1e-5 of its energy: two correct programs then
+    agree on the rate to about 1e-8 (measured with rounding-sized noise on every step); over 2 s, E_N - E_rest
+    is down to rounding and they differ by up to 3e-2 at h = 0.1 s, far beyond rtol = 1e-6.
+    """
     hs = np.sort(10 ** rng.uniform(np.log10(0.004), np.log10(0.2), 4))
-    _check_rates(student, feedback, hs, float(rng.uniform(1.0, 2.0)), "damping_rates at random steps", True)
+    _check_rates(student, feedback, hs, float(rng.uniform(0.3, 0.8)), "damping_rates at random steps", True)
