@@ -347,7 +347,7 @@ def main(argv=None):
         return
     import numba
 
-    import particles.backends.compiled  # noqa: F401  (before numba starts its threads: it picks their pool)
+    import particles.backends.compile  # noqa: F401  (before numba starts its threads: it picks their pool)
 
     threads = numba.get_num_threads()
     print(f"numba {numba.__version__}, {threads} threads; load average before: {os.getloadavg()[0]:.2f}")

@@ -134,12 +134,12 @@ def xpbd_sizes(sides=(8, 16, 24, 32, 48, 64), rounds=2, steps=20):
 
 def warm_up():
     """Load (or, with a cold cache, compile) the kernels before the timing: the collision pipeline's and
-    XPBD's (:func:`particles.backends.warm.warm`), then one step of a small sheet.
+    XPBD's (:func:`particles.warm.warm`), then one step of a small sheet.
 
     A first run in a fresh clone compiles them here (about half a minute), not in its first steps: one
     step of an 8 x 8 sheet alone met a few of them, and the 64^2 run's worst step was then 17.7 s.
     """
-    from particles.backends.warm import warm
+    from particles.warm import warm
 
     warm(["cloth collisions", "constraints"])
     run(8, H, True, backend="numba")

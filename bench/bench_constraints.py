@@ -170,7 +170,7 @@ def xpbd_substeps(n, rounds=3):
         return
     import numba
 
-    import particles.backends.compiled  # noqa: F401  (before numba starts its threads: it picks their pool)
+    import particles.backends.compile  # noqa: F401  (before numba starts its threads: it picks their pool)
 
     threads = numba.get_num_threads()
     print(f"XPBD substep at {n}^2, Gauss-Seidel, 1 iteration (numba {numba.__version__}, {threads} threads, "

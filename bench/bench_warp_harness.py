@@ -319,7 +319,7 @@ def main(argv=None):
         return
     import numba
 
-    import particles.backends.compiled  # noqa: F401  (before numba starts its threads: it picks their pool)
+    import particles.backends.compile  # noqa: F401  (before numba starts its threads: it picks their pool)
 
     threads = numba.get_num_threads()
     notes = [f"{name} is not installed (pip install 'particles[bench]'): its columns are skipped"

@@ -9,11 +9,28 @@ as a Verlet list keeps neighbours, for the pipeline of :mod:`particles.collision
 
 import numpy as np
 
-from ..backends import CLOTH_COLLISION_WEIGHT, check_backend, kernels_for
-from .triangle_crossing import box_pairs
+from ..backends import check_backend, compiled
+from .triangle_crossing import box_pairs, intervals_overlap
 
-__all__ = ["element_boxes", "candidate_elements", "candidates_in_boxes", "pair_rows", "candidate_pairs",
+__all__ = ["CLOTH_COLLISION_WEIGHT", "compiled_stages", "element_boxes", "candidate_elements", "candidates_in_boxes", "pair_rows", "candidate_pairs",
            "boxes_overlap", "candidates_touching", "merge_keys", "CandidateCache"]
+
+
+# the cloth collision pipeline asks "auto" (particles.backends) with this many times its vertices: each vertex
+# carries dozens of force passes' work (its candidate pairs' closest points, up to 50 Jacobi iterations, the
+# continuous test), and NumPy's calls cost the same whatever the sheet. Measured with
+# bench/bench_cloth_fold.py --compare (median ms per step, NumPy / compiled): 8^2 6.3 / 1.3, 16^2 18.6 / 2.8,
+# 32^2 about 60 / 8: compiled from 64 vertices
+CLOTH_COLLISION_WEIGHT = 64
+
+
+def compiled_stages(backend, n):
+    """The cloth pipeline's compiled stages (:mod:`particles.collisions.compiled_stages`) when `backend` resolves to
+    numba for a mesh of `n` vertices (weighted by :data:`CLOTH_COLLISION_WEIGHT`), else None."""
+    if not compiled(backend, CLOTH_COLLISION_WEIGHT * n):
+        return None
+    from . import compiled_stages as stages  # noqa: PLC0415  (imports numba)
+    return stages
 
 
 def _boxes(x0, x1, index, pad):
@@ -88,7 +105,7 @@ def candidate_pairs(mesh, x0, x1, pad, vertices=None):
 def boxes_overlap(boxes_a, boxes_b, ia, ib):
     """Whether boxes ``ia`` of one set overlap boxes ``ib`` of another (each set a pair ``(lo, hi)``)."""
     (lo_a, hi_a), (lo_b, hi_b) = boxes_a, boxes_b
-    return np.all((lo_a[ia] <= hi_b[ib]) & (lo_b[ib] <= hi_a[ia]), axis=1)
+    return np.all(intervals_overlap(lo_a[ia], hi_a[ia], lo_b[ib], hi_b[ib]), axis=1)
 
 
 def _overlap_matrix(lo_a, hi_a, lo_b, hi_b):
@@ -97,7 +114,7 @@ def _overlap_matrix(lo_a, hi_a, lo_b, hi_b):
     step = max(1, 2_000_000 // max(len(lo_b), 1))
     for s in range(0, len(lo_a), step):  # a loop over chunks of a few rows
         la, ha = lo_a[s:s + step, None, :], hi_a[s:s + step, None, :]
-        ok = np.all((la <= hi_b[None]) & (lo_b[None] <= ha), axis=2)
+        ok = np.all(intervals_overlap(la, ha, lo_b[None], hi_b[None]), axis=2)
         i, j = np.nonzero(ok)
         I.append(i + s)
         J.append(j)
@@ -135,7 +152,7 @@ class CandidateCache:
     every box. With the compiled backend each call searches its own boxes instead (the same pairs), and a
     call without a mask whose padded boxes lie within those of the last such call filters that call's
     pairs (in a step, the continuous test's first search within the proximity search's boxes; ``memo``
-    of :func:`particles.backends.cloth.cloth_candidate_rows`).
+    of :func:`particles.collisions.compiled_stages.cloth_candidate_rows`).
 
     Parameters
     ----------
@@ -147,7 +164,7 @@ class CandidateCache:
         The narrow phase's tolerance, in metres.
     backend : {None, "auto", "numpy", "numba"}
         Who searches and filters the pairs (:mod:`particles.backends`): NumPy, or the compiled grid of
-        :func:`particles.backends.cloth.cloth_candidates` (the same pairs).
+        :func:`particles.collisions.compiled_stages.cloth_candidates` (the same pairs).
 
     Attributes
     ----------
@@ -216,7 +233,7 @@ class CandidateCache:
         vertex-face rows ``(vertex, a, b, c)`` and the edge-edge rows ``(p_1, p_2, q_1, q_2)``.
         """
         mesh = self.mesh
-        fast = kernels_for(self.backend, CLOTH_COLLISION_WEIGHT * mesh.n)
+        fast = compiled_stages(self.backend, mesh.n)
         a, b = self.update(x0, dx, search=fast is None)
         if fast is not None:  # compiled: a search with the step's own boxes finds the pairs the cache would give
             return fast.cloth_candidate_rows(mesh, np.minimum(a, b), np.maximum(a, b), 0.5 * pad, moved, self.memo)

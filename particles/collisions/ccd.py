@@ -266,7 +266,7 @@ def detect_pairs(x0, dx, vf, ee, eta, fast=None):
     """:func:`particles.collisions.ccd.detect` on given candidate pairs (with `fast`, the compiled kernels)."""
     found = []
     for idx, edge in ((vf, False), (ee, True)):  # the two kinds of pairs
-        if fast is not None:  # pair by pair, compiled (particles.backends.cloth)
+        if fast is not None:  # pair by pair, compiled (particles.collisions.compiled_stages)
             rows, W, N, T = fast.cloth_first_contacts(x0, dx, idx, edge, eta, F_TOL, BISECTIONS, PARALLEL)
             found.append(Impacts(rows, W, N, T, np.full(len(T), edge)))
             continue

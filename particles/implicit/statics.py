@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import ConvergenceError
 from ..forces.fields import Damping, Gravity, Wind
-from ..springs import Bending, Clamp
+from ..forces import Bending, Clamp
 from .baraffwitkin import BaraffWitkin
 
 __all__ = ["relax"]
@@ -63,8 +63,8 @@ def relax(system, h=0.05, tol=1e-8, max_steps=2000, method="auto"):
     Notes
     -----
     **The stopping rule.** At rest, a free particle ``p`` is in equilibrium
-    when its internal forces (springs, :class:`~particles.springs.Bending`,
-    :class:`~particles.springs.Clamp`) balance its loads, the forces of all
+    when its internal forces (springs, :class:`~particles.forces.Bending`,
+    :class:`~particles.forces.Clamp`) balance its loads, the forces of all
     the other force objects (gravity, wind, fields; damping is zero at
     rest). Its load is ``w_p = sum_f |F_f(p)|`` over those external forces,
     at the current positions: ``m_p |g|`` for a cloth or a string. ``relax``

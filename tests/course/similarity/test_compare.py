@@ -103,7 +103,7 @@ def test_renamed_copy_of_the_string_builder_is_identical(tmp_path):
     cell = ("import numpy as np\nfrom particles.massspring import MassSpringSystem\n"
             "from particles.massspring.strands import _chain, _chain_parameters\n"
             "from particles.massspring.model import common_forces\n"
-            "from particles.springs import Springs\n\n"
+            "from particles.forces import Springs\n\n"
             + renamed(particles.massspring.string, names)
             + "\n\ndef run(f, X0, t0, h, n_steps):\n    system = make_chain(3)\n    return system.X, n_steps\n")
     write(tmp_path, "ada", EX00, replace={"run": cell})

@@ -19,7 +19,7 @@ import particles
 from particles.constraints import RigidRods
 from particles.effects import Boids, Containment
 from particles.forces import Attractor, Damping, Field, Force, Gravity, LennardJones, NBodyGravity, Vortex, Wind
-from particles.springs import Bending, Clamp, Springs
+from particles.forces import Bending, Clamp, Springs
 
 N = 12  # particles of every test configuration
 
