@@ -38,6 +38,8 @@ import types
 import warnings
 from pathlib import Path
 
+from .._vectors import select, vadd, vcross, vdot, vscale, vselect, vsub
+
 try:
     import numba
     from numba import prange
@@ -151,6 +153,22 @@ def inline(law, into="always"):
 
 
 _INLINED = set()
+
+
+def _register_vector_helpers():
+    """The tuple helpers of :mod:`particles._vectors` callable in kernels; :func:`~particles._vectors.select` a branch."""
+    from numba.extending import overload  # noqa: PLC0415
+
+    @overload(select)
+    def _select(condition, a, b):
+        return lambda condition, a, b: a if condition else b
+
+    for helper in (vdot, vsub, vadd, vcross, vscale, vselect):
+        inline(helper)
+
+
+if numba is not None:
+    _register_vector_helpers()
 
 
 def parallel(size, threads=2):

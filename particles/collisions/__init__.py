@@ -21,8 +21,9 @@ the continuous test and the broad phase (``from particles.collisions import Coll
 * :mod:`particles.collisions.proximity`: closest points of vertex-triangle and edge-edge pairs;
 * :mod:`particles.collisions.ccd`: continuous collision detection: when, within a step, a vertex hits a
   triangle or two edges meet;
-* :mod:`particles.collisions.candidates`: the broad phase: pairs whose swept boxes overlap, kept from step to
-  step (:class:`CandidateCache`);
+* :mod:`particles.collisions.candidates`: the broad phase: pairs whose swept boxes overlap;
+* :mod:`particles.collisions.candidate_cache`: the pairs kept from step to step
+  (:class:`~particles.collisions.candidate_cache.CandidateCache`), and the loader of the compiled stages;
 * :mod:`particles.collisions.bodies`: the cloth against moving bodies (stage 1 of the pipeline);
 * :mod:`particles.collisions.proximity_impulses`: impulses between pieces of the cloth closer than its
   thickness (stage 2 of the pipeline);

@@ -10,7 +10,7 @@ that a thin body does not slip between two vertices. :class:`BodyStage` holds th
 
 import numpy as np
 
-from .candidates import compiled_stages
+from .candidate_cache import compiled_stages
 from .response import friction_change
 from .proximity import dot
 

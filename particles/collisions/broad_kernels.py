@@ -31,7 +31,10 @@ QUERY_BLOCK = 256
 
 @jit()
 def corner_bounds(v_lo, v_hi, idx, lo, hi):
-    """``lo[k] = min_j v_lo[idx[k, j]]`` and ``hi[k] = max_j v_hi[idx[k, j]]``: the box around an element's corners."""
+    """``lo[k] = min_j v_lo[idx[k, j]]`` and ``hi[k] = max_j v_hi[idx[k, j]]``: the box around an element's corners.
+
+    The faces' and edges' boxes of :func:`particles.collisions.candidates.candidates_in_boxes` (a gather).
+    """
     for k in range(idx.shape[0]):
         for a in range(3):
             lo[k, a] = v_lo[idx[k, 0], a]
@@ -266,7 +269,10 @@ def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
 
 @jit(parallel=True)
 def key_rows(keys, m, Q, T, out):
-    """``out[k] = (Q[q], T[t])`` for each key ``q m + t``: the vertices of each candidate pair, in one row."""
+    """``out[k] = (Q[q], T[t])`` for each key ``q m + t``: the vertices of each candidate pair, in one row.
+
+    The rows of :func:`particles.collisions.candidates.pair_rows` (a gather).
+    """
     a = Q.shape[1]
     for k in prange(len(keys)):
         q, t = keys[k] // m, keys[k] % m

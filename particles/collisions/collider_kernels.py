@@ -29,10 +29,10 @@ import numpy as np
 
 from ..backends.compile import inline, jit, pick, prange
 from .response import friction_change, normal_change
-from .surfaces import Box, Cylinder, Plane, Sphere
+from .surfaces import Box, Cylinder, Plane, Sphere, box_height, plane_height, round_height
 
-inline(normal_change)
-inline(friction_change)
+for _law in (normal_change, friction_change, plane_height, round_height, box_height):
+    inline(_law)
 
 PLANE, SPHERE, BOX, CYLINDER = 0, 1, 2, 3
 CROSSING_TOL, INSIDE_TOL = 1e-12, 1e-9  # particles.collisions.surface_crossing's tolerances
@@ -66,24 +66,16 @@ def _cylinder_offset(P, x0, x1, x2):
 
 
 def surface_H(kind, P, d, x0, x1, x2):
-    """The signed distance ``H(x)`` of the surface (negative inside the solid)."""
+    """The signed distance ``H(x)`` of the surface (negative inside the solid): the surfaces' laws."""
     if kind == PLANE:  # P: n (3), -n . p
-        H = P[3] + P[0] * x0
-        H += P[1] * x1
-        if d == 3:
-            H += P[2] * x2
-        return H
+        return plane_height(x0, x1, x2 if d == 3 else 0.0, P[0], P[1], P[2] if d == 3 else 0.0, P[3])
     if kind == SPHERE:  # P: c (3), r, sign
-        r0, r1, r2 = x0 - P[0], x1 - P[1], x2 - P[2]
-        return P[4] * (math.sqrt(_dot(r0, r1, r2, r0, r1, r2)) - P[3])
+        return round_height(x0 - P[0], x1 - P[1], x2 - P[2], P[3], P[4])
     if kind == BOX:  # P: c (3), half (3), lo (3), hi (3), sign
         q, _, k = _box_q(P, d, x0, x1, x2)
-        outside = max(q[0], 0.0) ** 2 + max(q[1], 0.0) ** 2
-        if d == 3:
-            outside += max(q[2], 0.0) ** 2
-        return P[12] * (math.sqrt(outside) + min(q[k], 0.0))
+        return box_height(q[0], q[1], q[2], P[12])
     _, r = _cylinder_offset(P, x0, x1, x2)  # P: p (3), a (3), R, sign, across (3)
-    return P[7] * (math.sqrt(_dot(r[0], r[1], r[2], r[0], r[1], r[2])) - P[6])
+    return round_height(r[0], r[1], r[2], P[6], P[7])
 
 
 def _directions(kind, P, x0, x1, x2):

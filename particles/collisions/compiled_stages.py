@@ -1,14 +1,14 @@
 """The cloth collision pipeline's compiled stages (numba): broad phase, proximity, the continuous test.
 
 :class:`particles.collisions.ClothCollisions` and its
-:class:`~particles.collisions.candidates.CandidateCache` call these (through
+:class:`~particles.collisions.candidate_cache.CandidateCache` call these (through
 :func:`particles.backends.compiled`) when their backend resolves to
 numba. Each returns what the NumPy stage it replaces returns:
 
 * :func:`cloth_candidates`: the candidate pairs of
   :func:`particles.collisions.candidates.candidates_in_boxes` (the same
   sorted sets: a bucket grid walked box by box, :mod:`particles.collisions.broad_kernels`);
-  :meth:`~particles.collisions.candidates.CandidateCache.pairs` searches each call's own boxes with it,
+  :meth:`~particles.collisions.candidate_cache.CandidateCache.pairs` searches each call's own boxes with it,
   which gives the rows its cache would (the cache only ever holds more pairs than the boxes select); a
   masked search that touches few elements tests them against every box instead of building a grid
   (:func:`particles.collisions.broad_kernels.touching_candidates`), and a search within the boxes of an
@@ -35,7 +35,7 @@ from ..backends.compile import pick
 from .body_kernels import body_vertices, low_edge_samples
 from .broad_kernels import box_candidates, corner_bounds, key_rows, kept_pairs, touching_candidates
 from .collider_kernels import surface_rows
-from .contact_kernels import closest_pairs, first_contact_pairs, kept_rows, proximity_rows
+from .contact_kernels import closest_pairs, first_contact_pairs, proximity_rows
 from .impulse_kernels import BLOCKS, proximity_impulses
 
 __all__ = ["cloth_candidates", "cloth_candidate_rows", "cloth_closest", "cloth_proximity", "cloth_first_contacts",
@@ -170,7 +170,7 @@ def cloth_candidate_rows(mesh, lo, hi, pad, vertices=None, memo=None):
     (k, 4) each, int64, in the order of the sorted keys; the arguments as :func:`cloth_candidates`, and
 
     memo : dict, optional
-        Kept by the caller from call to call (:class:`~particles.collisions.candidates.CandidateCache`
+        Kept by the caller from call to call (:class:`~particles.collisions.candidate_cache.CandidateCache`
         keeps one): the padded vertex boxes and the pairs of the last search without a mask. When at
         most one vertex in ``LEFT_MAX`` has a padded box outside its box there, the pairs are taken from
         that search's (those whose boxes still overlap) and only the pairs holding a vertex that left are
@@ -214,7 +214,7 @@ def cloth_proximity(x0, vbar, w, x_rest, rows, edge, h, thickness, rest_distance
     xr = np.ascontiguousarray(x_rest) if rest else np.zeros((0, 3))
     pick(proximity_rows, k)(np.ascontiguousarray(x0), np.ascontiguousarray(vbar), w, xr, rest, rows, edge,
                             float(h), thickness, rest_distance, parallel_tol, keep, distance, normal, weights)
-    return kept_rows(keep, rows, weights, normal, distance)
+    return rows[keep], weights[keep], normal[keep], distance[keep]
 
 
 def cloth_first_contacts(x0, dx, rows, edge, eta, ftol, bisections, parallel_tol):

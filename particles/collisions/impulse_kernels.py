@@ -26,9 +26,10 @@ import math
 
 import numpy as np
 
+from .._vectors import vdot
 from ..backends.compile import inline, jit, prange
 from .body_kernels import out_of_bodies
-from .contact_kernels import combine, dot3, row3
+from .contact_kernels import combine, row3
 from .response import friction_change, proximity_impulse
 
 inline(friction_change)
@@ -40,6 +41,71 @@ BLOCKS = 8  # slices of the active contacts summed apart, at most (a fixed cut: 
 
 def row4(W, k):
     return (W[k, 0], W[k, 1], W[k, 2], W[k, 3])
+
+
+def _mark_active(b, span, K, vbar, V, W, N, target, h, tol, active):
+    """Block b of the contacts: which are below their target normal velocity (into `active`), and how many."""
+    f = 0
+    for k in range(b * span, min(K, (b + 1) * span)):
+        a = (target[k] - vdot(row3(N, k), combine(row4(W, k), vbar, V, k))) * h > tol
+        active[k] = a
+        f += a
+    return f
+
+
+def _slice_loads(b, size, m, order, V, W, w, part_load, part_hit):
+    """Slice b of the active contacts: each free vertex's load ``sum |W_j|`` over them, and whether it is touched."""
+    for p in range(part_load.shape[1]):
+        part_load[b, p] = 0.0
+        part_hit[b, p] = False
+    for i in range(b * size, min(m, (b + 1) * size)):
+        k = order[i]
+        for j in range(4):
+            v = V[k, j]
+            if w[v] > 0:
+                part_load[b, v] += abs(W[k, j])
+                part_hit[b, v] = True
+
+
+def _impulse(i, k, vbar, V, W, N, S, target, w, load, relaxed, friction, impulse):
+    """Active contact k's impulse (row i of `impulse`): to its target, divided by the largest load at its free
+    vertices over `relaxed` (at least 1), with Coulomb friction (``ProximityStage._impulses``)."""
+    c = 0.0
+    for j in range(4):
+        if w[V[k, j]] > 0 and abs(W[k, j]) > 0:
+            c = max(c, load[V[k, j]])
+    c = max(c / relaxed, 1.0)
+    r0, r1, r2 = combine(row4(W, k), vbar, V, k)
+    vN = vdot(row3(N, k), (r0, r1, r2))
+    I = proximity_impulse(target[k], vN, S[k], c)
+    impulse[i, 0], impulse[i, 1], impulse[i, 2] = I * N[k, 0], I * N[k, 1], I * N[k, 2]
+    if friction > 0:
+        t0, t1, t2 = r0 - vN * N[k, 0], r1 - vN * N[k, 1], r2 - vN * N[k, 2]
+        speed = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+        J = friction_change(friction, I, speed / S[k] / c)
+        f = J / speed if speed > 0 else 0.0
+        impulse[i, 0] -= f * t0
+        impulse[i, 1] -= f * t1
+        impulse[i, 2] -= f * t2
+
+
+def _slice_velocities(b, size, m, order, V, W, w, impulse, part_vel):
+    """Slice b of the active contacts: each free vertex's velocity change ``w_j W_j impulse``, summed."""
+    for p in range(part_vel.shape[1]):
+        part_vel[b, p, 0] = part_vel[b, p, 1] = part_vel[b, p, 2] = 0.0
+    for i in range(b * size, min(m, (b + 1) * size)):
+        k = order[i]
+        for j in range(4):
+            v = V[k, j]
+            if w[v] > 0:
+                scale = W[k, j] * w[v]
+                part_vel[b, v, 0] += scale * impulse[i, 0]
+                part_vel[b, v, 1] += scale * impulse[i, 1]
+                part_vel[b, v, 2] += scale * impulse[i, 2]
+
+
+for _helper in (row4, _mark_active, _slice_loads, _impulse, _slice_velocities):  # compiled into proximity_impulses
+    inline(_helper)
 
 
 @jit(parallel=True)
@@ -65,12 +131,7 @@ def proximity_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, relaxa
     for it in range(iterations):
         relaxed = relaxation if start + it > 0 else 1.0  # the first iteration plain averaging, the later ones relaxed
         for b in prange(BLOCKS):  # the contacts below their target, counted in blocks of contacts
-            f = 0
-            for k in range(b * span, min(K, (b + 1) * span)):
-                a = (target[k] - dot3(row3(N, k), combine(row4(W, k), vbar, V, k))) * h > tol
-                active[k] = a
-                f += a
-            found[b + 1] = f
+            found[b + 1] = _mark_active(b, span, K, vbar, V, W, N, target, h, tol, active)
         for b in range(BLOCKS):
             found[b + 1] += found[b]
         m = found[BLOCKS]
@@ -87,52 +148,16 @@ def proximity_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, relaxa
         parts = min(BLOCKS, max(1, m // part_min))
         size = (m + parts - 1) // parts
         for b in prange(parts):  # each slice's loads: sum of |w_j| over its contacts at each free vertex
-            for p in range(n):
-                part_load[b, p] = 0.0
-                part_hit[b, p] = False
-            for i in range(b * size, min(m, (b + 1) * size)):
-                k = order[i]
-                for j in range(4):
-                    v = V[k, j]
-                    if w[v] > 0:
-                        part_load[b, v] += abs(W[k, j])
-                        part_hit[b, v] = True
+            _slice_loads(b, size, m, order, V, W, w, part_load, part_hit)
         for p in prange(n):
             s = 0.0
             for b in range(parts):
                 s += part_load[b, p]
             load[p] = s
         for i in prange(m):  # each active contact's impulse, divided by the largest load at its free vertices
-            k = order[i]
-            c = 0.0
-            for j in range(4):
-                if w[V[k, j]] > 0 and abs(W[k, j]) > 0:
-                    c = max(c, load[V[k, j]])
-            c = max(c / relaxed, 1.0)
-            r0, r1, r2 = combine(row4(W, k), vbar, V, k)
-            vN = dot3(row3(N, k), (r0, r1, r2))
-            I = proximity_impulse(target[k], vN, S[k], c)
-            impulse[i, 0], impulse[i, 1], impulse[i, 2] = I * N[k, 0], I * N[k, 1], I * N[k, 2]
-            if friction > 0:
-                t0, t1, t2 = r0 - vN * N[k, 0], r1 - vN * N[k, 1], r2 - vN * N[k, 2]
-                speed = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
-                J = friction_change(friction, I, speed / S[k] / c)
-                f = J / speed if speed > 0 else 0.0
-                impulse[i, 0] -= f * t0
-                impulse[i, 1] -= f * t1
-                impulse[i, 2] -= f * t2
+            _impulse(i, order[i], vbar, V, W, N, S, target, w, load, relaxed, friction, impulse)
         for b in prange(parts):  # each slice's velocity changes w_j W_j impulse at each free vertex
-            for p in range(n):
-                part_vel[b, p, 0] = part_vel[b, p, 1] = part_vel[b, p, 2] = 0.0
-            for i in range(b * size, min(m, (b + 1) * size)):
-                k = order[i]
-                for j in range(4):
-                    v = V[k, j]
-                    if w[v] > 0:
-                        scale = W[k, j] * w[v]
-                        part_vel[b, v, 0] += scale * impulse[i, 0]
-                        part_vel[b, v, 1] += scale * impulse[i, 1]
-                        part_vel[b, v, 2] += scale * impulse[i, 2]
+            _slice_velocities(b, size, m, order, V, W, w, impulse, part_vel)
         for p in prange(n):  # the slices' sums added to vbar, then the vertex out of the bodies
             hit = False
             s0 = s1 = s2 = 0.0
@@ -147,7 +172,3 @@ def proximity_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, relaxa
                 vbar[p, 2] += s2
                 out_of_bodies(p, x0, vbar, h, thickness, friction, kinds, rows)
     return done
-
-
-for _helper in (row4,):  # compiled into the kernels that call them
-    inline(_helper, into="never")

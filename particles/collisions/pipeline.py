@@ -118,7 +118,8 @@ from ..backends import check_backend
 from ..integrators.solvers import after
 from ..constraints.colouring import color_constraints
 from .bodies import BodyStage, StaticBody
-from .candidates import CandidateCache, candidate_pairs, compiled_stages
+from .candidate_cache import CandidateCache, compiled_stages
+from .candidates import candidate_pairs
 from .ccd import Impacts, detect_pairs
 from .mesh import TriangleMesh
 from .proximity import dot, edge_edge_kernel, vertex_face_kernel
@@ -238,7 +239,7 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
     backend : {None, "auto", "numpy", "numba"}
         Who runs the broad phase, the proximity tests and Jacobi impulses, and the continuous test
         (:mod:`particles.backends`; :mod:`particles.collisions.compiled_stages`: the same contacts and verdicts);
-        "auto" compiles from 64 vertices (:data:`particles.collisions.candidates.CLOTH_COLLISION_WEIGHT`).
+        "auto" compiles from 64 vertices (:data:`particles.collisions.candidate_cache.CLOTH_COLLISION_WEIGHT`).
 
     Attributes
     ----------

@@ -11,9 +11,9 @@ Gauss-Seidel over vertex-disjoint colour groups), each iteration followed by the
 import numpy as np
 
 from ..constraints.colouring import color_constraints
-from .candidates import compiled_stages
+from .candidate_cache import compiled_stages
 from .response import friction_change, proximity_impulse
-from .proximity import PARALLEL, dot, edge_edge_kernel, vertex_face_kernel
+from .proximity import PARALLEL, approaching_within, dot, edge_edge_kernel, vertex_face_kernel
 
 __all__ = ["ProximityStage"]
 
@@ -49,7 +49,7 @@ class ProximityStage:
             p = x0[idx]
             close = (edge_edge_kernel if edge else vertex_face_kernel)(p[:, 0], p[:, 1], p[:, 2], p[:, 3])
             vN = dot(close.normal, self._relative(vbar, idx, close.weights))
-            keep = (close.distance < self.thickness) | (close.distance + h * vN < self.thickness)
+            keep = approaching_within(close.distance, vN, h, self.thickness)
             keep &= self._effective(idx, close.weights) > 0
             if edge:  # edges whose closest points are ends: that contact is a vertex's, found with the faces
                 s_, u_ = close.weights[:, 1], -close.weights[:, 3]

@@ -75,7 +75,7 @@ def local_step(xt, i, j, k, L0, free, m, y, h2, xr, Si, Sj, Fs, Jd, out):
 
 @jit()
 def global_step(b, Jd, h2, perm_r, perm_c, Lp, Lj, Lx, Up, Uj, Ux, Ud, y, out):
-    """out (d, f) solving ``Q out = b + h2 Jd`` with SuperLU's factors ``Pr Q Pc = L U`` (rows in CSR).
+    """out (d, f) solving ``Q out = b + h2 Jd`` with SuperLU's factors ``Pr Q Pc = L U`` (rows in CSR): ``Prefactored._global``.
 
     ``Lp, Lj, Lx``: L's strictly lower part (L has a unit diagonal); ``Up, Uj, Ux``: U's strictly upper
     part, ``Ud`` its diagonal; ``perm_r``, ``perm_c``: SuperLU's permutations; `y` (f, 3) scratch (in
@@ -132,7 +132,10 @@ def global_step(b, Jd, h2, perm_r, perm_c, Lp, Lj, Lx, Up, Uj, Ux, Ud, y, out):
 
 @jit()
 def gradient_norm(Qp, Qj, Qx, u, b, Jd, h2):
-    """``|g|``, g = (Q u - b) / h2 - Jd the gradient of Phi on the free particles (Q in CSR, (d, f) arrays)."""
+    """``|g|``, g = (Q u - b) / h2 - Jd the gradient of Phi on the free particles (Q in CSR, (d, f) arrays).
+
+    ``Prefactored._gradient_norm`` computed by rows, without the sparse product's temporaries.
+    """
     dim, f = u.shape
     total = 0.0
     for c in range(dim):

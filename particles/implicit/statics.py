@@ -23,6 +23,16 @@ __all__ = ["relax"]
 ROUNDOFF = 16 * np.finfo(float).eps
 
 
+def _force_scale(system, X, free):
+    """The force scale of Newton's equations: the largest net force at X or force of any one force object (N)."""
+    scale = max(np.max(np.abs(system.total_force(X, system.t)[free]), initial=0.0), 1e-300)
+    for force in system.forces:  # a loop over the few force objects
+        F_one = np.zeros_like(X[:, 0])
+        force.add_to(F_one, X[:, 0], X[:, 1], system.t, system.m)
+        scale = max(scale, np.max(np.abs(F_one[free]), initial=0.0))
+    return scale
+
+
 def relax(system, h=0.05, tol=1e-8, max_steps=2000, method="auto"):
     """Static equilibrium of a mass-spring system: positions where the net force on every free particle vanishes.
 
@@ -106,12 +116,7 @@ def relax(system, h=0.05, tol=1e-8, max_steps=2000, method="auto"):
     free = np.setdiff1d(np.arange(system.n), system.pinned)
     X = system.X.copy(order="K")
     X[:, 1] = 0.0
-    # the force scale of Newton's equations: the largest net force at the start or force of any one force object
-    scale = max(np.max(np.abs(system.total_force(X, system.t)[free]), initial=0.0), 1e-300)
-    for force in system.forces:  # a loop over the few force objects
-        F_one = np.zeros_like(X[:, 0])
-        force.add_to(F_one, X[:, 0], X[:, 1], system.t, system.m)
-        scale = max(scale, np.max(np.abs(F_one[free]), initial=0.0))
+    scale = _force_scale(system, X, free)
     internal = {id(s) for s in system.springs.values()}
     external = [f for f in system.forces if id(f) not in internal and not isinstance(f, (Bending, Clamp))]
     k_max = max((float(s.k.max(initial=0.0)) for s in system.springs.values()), default=0.0)

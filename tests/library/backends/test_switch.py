@@ -84,7 +84,7 @@ def test_auto_compiles_the_cloth_collisions_from_64_vertices(monkeypatch, side, 
 
     from particles.collisions import ClothCollisions, Plane, TriangleMesh  # noqa: PLC0415
     from particles.collisions import compiled_stages as kernels  # noqa: PLC0415
-    from particles.collisions.candidates import CLOTH_COLLISION_WEIGHT  # noqa: PLC0415
+    from particles.collisions.candidate_cache import CLOTH_COLLISION_WEIGHT  # noqa: PLC0415
 
     fresh_environment(monkeypatch)
     calls = []

@@ -1,4 +1,4 @@
-"""The constraint sets (particles.xpbd.constraints): isometric bending, constraint damping, bad input."""
+"""The constraint sets (particles.xpbd.constraint_sets): isometric bending, constraint damping, bad input."""
 
 import numpy as np
 import pytest
