@@ -17,8 +17,9 @@ makes it, stepped by symplectic Euler through :meth:`ParticleSystem.run`
 * all of them at once (damping, kd, bending, wind, Provot's pass and the sphere).
 
 NumPy is ``backends.using("numpy")``, compiled ``backends.using("numba")``
-(the compiled step, :class:`particles.backends.compiled.CompiledStep`, and
-the compiled fixes, :mod:`particles.backends.fixes`); "1 thread" is the
+(the compiled step, :class:`particles.massspring.compiled_step.CompiledStep`, and
+the compiled fixes, :mod:`particles.constraints.kernels` and
+:mod:`particles.collisions.collider_kernels`); "1 thread" is the
 compiled path with numba on one thread (the time when the other core is
 busy). Each configuration starts both from the same state, and their end
 states after one step are checked against each other first (1e-12

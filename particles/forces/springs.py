@@ -30,7 +30,8 @@ References
 
 import numpy as np
 
-from .._vectors import unit
+from .._vectors import select, unit
+from .pairs import pair_differences
 
 __all__ = ["damped_spring_force", "spring_forces", "spring_jacobian_blocks", "spring_jacobians", "joint_factor",
            "bending_forces", "clamp_forces"]
@@ -199,8 +200,7 @@ def joint_factor(c, theta0, kb):
         Stiffness, in N m / rad.
     """
     s = np.sqrt(np.maximum(1.0 - c * c, 0.0))
-    straight = s <= 1e-8
-    return kb * ((np.arccos(c) - theta0) / np.maximum(s, 1e-8) * (1 - straight) + straight)
+    return kb * select(s > 1e-8, (np.arccos(c) - theta0) / np.maximum(s, 1e-8), 1.0)
 
 
 def bending_forces(F, x, i, j, l, kb, theta0):
@@ -223,8 +223,8 @@ def bending_forces(F, x, i, j, l, kb, theta0):
         Stiffnesses (N m / rad) and rest angles (rad).
     """
     n = len(F)
-    L1, u1 = unit(x.T[:, j] - x.T[:, i])  # e1 = x_j - x_i, (d, b)
-    L2, u2 = unit(x.T[:, l] - x.T[:, j])
+    L1, u1 = unit(pair_differences(x, j, i))  # e1 = x_j - x_i, one row per coordinate
+    L2, u2 = unit(pair_differences(x, l, j))
     c = np.clip(np.einsum("as,as->s", u1, u2), -1.0, 1.0)
     factor = joint_factor(c, theta0, kb)
     g1 = (u2 - c * u1) * np.divide(factor, L1, out=np.zeros_like(L1), where=L1 > 0)
@@ -254,7 +254,7 @@ def clamp_forces(F, x, i, j, u0, kb):
         Stiffnesses, in N m / rad.
     """
     n = len(F)
-    L, u = unit(x.T[:, j] - x.T[:, i])  # (d, c)
+    L, u = unit(pair_differences(x, j, i))  # e = x_j - x_i, one row per coordinate
     c = np.clip(np.einsum("as,as->s", u, u0.T), -1.0, 1.0)
     g = (u0.T - c * u) * np.divide(joint_factor(c, 0.0, kb), L, out=np.zeros_like(L), where=L > 0)
     for a in range(F.shape[1]):  # a loop over the d coordinates
