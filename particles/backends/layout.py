@@ -1,4 +1,4 @@
-"""The layouts the compiled kernels share: per-particle incidence lists in compressed rows.
+"""The layouts the compiled kernels share: per-particle incidence lists in compressed rows, C-ordered states.
 
 A kernel that sums, for each particle, the terms of the items (springs,
 joints, constraints) that touch it writes each particle's sum from one
@@ -7,9 +7,11 @@ of threads, without atomic additions. They are built once per set of items,
 in NumPy.
 """
 
+import contextlib
+
 import numpy as np
 
-__all__ = ["incidence"]
+__all__ = ["incidence", "c_ordered", "kept_array"]
 
 
 def incidence(rows, n, width, by_item):
@@ -49,3 +51,32 @@ def incidence(rows, n, width, by_item):
     ptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(rows, minlength=n), out=ptr[1:])
     return ptr, col
+
+
+@contextlib.contextmanager
+def c_ordered(X):
+    """X itself when it is C-ordered, else a C-ordered copy that is written back into X at the end.
+
+    A kernel that walks a state ``X`` of shape (n, 2, d) row by row reads it
+    in place; a view (a slice, a transpose) is copied in and out once.
+    """
+    if X.flags.c_contiguous:
+        yield X
+        return
+    rows = np.ascontiguousarray(X)
+    try:
+        yield rows
+    finally:
+        X[...] = rows
+
+
+def kept_array(store, name, shape, dtype=np.float64):
+    """The array ``store[name]`` of this shape and dtype, made anew (uninitialised) when either changed.
+
+    ``store`` is a dict an object keeps for its kernels' work arrays, so that
+    a step allocates nothing once the sizes are known.
+    """
+    a = store.get(name)
+    if a is None or a.shape != shape or a.dtype != dtype:
+        a = store[name] = np.empty(shape, dtype=dtype)
+    return a

@@ -10,7 +10,7 @@ pipeline's backend resolves to numba; :data:`CLOTH_COLLISION_WEIGHT` weighs its 
 import numpy as np
 
 from ..backends import check_backend, compiled
-from .candidates import boxes_overlap, candidates_in_boxes, element_boxes, merge_keys, pair_rows
+from .candidates import boxes_overlap, candidates_in_boxes, candidates_touching, element_boxes, merge_keys, pair_rows
 
 __all__ = ["CLOTH_COLLISION_WEIGHT", "compiled_stages", "CandidateCache"]
 

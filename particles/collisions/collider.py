@@ -52,7 +52,7 @@ from ..backends import check_backend, compiled
 from ..integrators.solvers import after
 from .response import response
 from .surface_crossing import cubic_path, first_crossing, hermite, hermite_coefficients, path_speed
-from .surfaces import Box, Complement, Cylinder, Intersection, Plane, Sphere, Surface, Union
+from .surfaces import Box, Cylinder, Plane, Sphere, Surface
 
 __all__ = ["Contacts", "Collider"]
 

@@ -22,12 +22,12 @@ a row of numbers (:data:`PLANE`, :data:`SPHERE`, :data:`BOX`,
 :data:`CYLINDER`; see :func:`surface_row`); the third coordinate of a 2D point is 0.
 """
 
-import contextlib
 import math
 
 import numpy as np
 
 from ..backends.compile import inline, jit, pick, prange
+from ..backends.layout import c_ordered, kept_array
 from .response import friction_change, normal_change
 from .surfaces import Box, Cylinder, Plane, Sphere, box_height, plane_height, round_height
 
@@ -343,27 +343,6 @@ def collider_resolve(kind, P, X_old, X, todo, m, t, h, backtrack, eps, mu, bounc
             X[p, 1, a] = v1[a]
 
 
-def _buffer(store, name, shape, dtype=np.float64):
-    """A kept array of this shape in the dict `store` (made anew when the shape changes)."""
-    a = store.get(name)
-    if a is None or a.shape != shape or a.dtype != dtype:
-        a = store[name] = np.empty(shape, dtype=dtype)
-    return a
-
-
-@contextlib.contextmanager
-def _rows(X):
-    """X (n, 2, d) itself when it is C-ordered, else a C-ordered copy that is written back into X at the end."""
-    if X.flags.c_contiguous:
-        yield X
-        return
-    rows = np.ascontiguousarray(X)
-    try:
-        yield rows
-    finally:
-        X[...] = rows
-
-
 def surface_row(surface):
     """The kind and the numbers of a primitive surface as the collider's kernels read them; None for others.
 
@@ -418,16 +397,16 @@ def collide(collider, X_old, X, t, h, m, free):
     kind, P = row
     n, _, d = X.shape
     store = collider.compiled_buffers
-    flag = _buffer(store, "flag", (n,), np.bool_)
+    flag = kept_array(store, "flag", (n,), np.bool_)
     backtrack = collider.method == "backtrack"
     lipschitz = 0.0 if collider.surface.lipschitz is None else float(collider.surface.lipschitz)
     X_old = np.ascontiguousarray(X_old)
-    with _rows(X) as X_c:
+    with c_ordered(X) as X_c:
         pick(collider_candidates, n)(kind, P, X_old, X_c, free, float(h), backtrack, lipschitz, flag)
         todo = np.flatnonzero(flag)
         slots = collider.max_bounces + 1
-        rec = _buffer(store, "rec", (max(len(todo), 16), slots, 1 + 4 * d))
-        has = _buffer(store, "has", rec.shape[:2], np.bool_)
+        rec = kept_array(store, "rec", (max(len(todo), 16), slots, 1 + 4 * d))
+        has = kept_array(store, "has", rec.shape[:2], np.bool_)
         pick(collider_resolve, len(todo))(kind, P, X_old, X_c, todo, m, float(t), float(h), backtrack,
                                           collider.restitution, collider.friction, collider.max_bounces,
                                           collider.samples, lipschitz, rec, has)

@@ -12,13 +12,12 @@ particle twice) in parallel. At the end the velocities take the displacement ove
 number of threads (the largest strain is a maximum, exact in any order).
 """
 
-import contextlib
 import math
 
 import numpy as np
 
 from ..backends.compile import inline, jit, pick, prange
-from ..backends.layout import incidence
+from ..backends.layout import c_ordered, incidence
 from .provot import ROUNDING, end_shares, provot_excess
 
 __all__ = ["CompiledProjection", "provot_passes"]
@@ -143,19 +142,6 @@ def provot_passes(X, i, j, L0, wi, wj, movable, free, max_strain, stop, iteratio
     return worst, passes
 
 
-@contextlib.contextmanager
-def _rows(X):
-    """X (n, 2, d) itself when it is C-ordered, else a C-ordered copy that is written back into X at the end."""
-    if X.flags.c_contiguous:
-        yield X
-        return
-    rows = np.ascontiguousarray(X)
-    try:
-        yield rows
-    finally:
-        X[...] = rows
-
-
 class CompiledProjection:
     """:meth:`particles.constraints.ProvotConstraint.stepper`'s projection, compiled, in place on a step's end state.
 
@@ -195,7 +181,7 @@ class CompiledProjection:
         c = self.constraint
         self._arrays(len(X))
         stop = c.max_strain + c.tol + ROUNDING
-        with _rows(X) as X_c:
+        with c_ordered(X) as X_c:
             worst, passes = pick(provot_passes, len(self.i))(
                 X_c, self.i, self.j, self.L0, self.wi, self.wj, self.movable, self.free, float(c.max_strain),
                 float(stop), int(c.iterations), float(h), c.groups is None, self.order, self.bounds, *self.lists,

@@ -42,8 +42,12 @@ inline(lennard_jones_virial)
 SPRING_THREADS = 4
 
 
-def _spring(x, v, a, b, L0, k, kd, damped, three):
-    """Spring (a, b)'s force on a, ``f u`` (three components, the third 0 in 2D): the arithmetic of spring_forces."""
+def spring_pull(x, v, a, b, at, L0, k, kd, three):
+    """Spring (a, b)'s force on a, ``f u`` (three components, the third 0 in 2D): the arithmetic of spring_forces.
+
+    Positions are rows `a`, `b` of `x`, velocities the columns from `at` of the same rows of `v` (the
+    compiled step keeps both in one array), read only for a damped spring (``kd != 0``).
+    """
     d0 = x[a, 0] - x[b, 0]
     d1 = x[a, 1] - x[b, 1]
     d2 = x[a, 2] - x[b, 2] if three else 0.0
@@ -51,19 +55,19 @@ def _spring(x, v, a, b, L0, k, kd, damped, three):
     inv_L = 1.0 / max(L, TINY)
     u0, u1, u2 = d0 * inv_L, d1 * inv_L, d2 * inv_L
     dL = 0.0
-    if damped:
-        dL = (v[a, 0] - v[b, 0]) * u0 + (v[a, 1] - v[b, 1]) * u1
+    if kd != 0.0:  # an undamped spring reads no velocity (kd dL = 0 either way)
+        dL = (v[a, at] - v[b, at]) * u0 + (v[a, at + 1] - v[b, at + 1]) * u1
         if three:
-            dL += (v[a, 2] - v[b, 2]) * u2
+            dL += (v[a, at + 2] - v[b, at + 2]) * u2
     f = damped_spring_force(L, L0, k, kd, dL)
     return f * u0, f * u1, f * u2
 
 
-inline(_spring)
+inline(spring_pull)
 
 
 @jit()
-def spring_scatter(S, x, v, i, j, L0, k, kd, damped):
+def spring_scatter(S, x, v, i, j, L0, k, kd):
     """One pass, one thread: each spring's force added to ``S_i`` and taken from ``S_j`` (S zero, (n, d)).
 
     Each particle's sum runs in increasing spring order from zero, as :func:`springs_in_parallel` gathers it.
@@ -71,7 +75,7 @@ def spring_scatter(S, x, v, i, j, L0, k, kd, damped):
     three = x.shape[1] == 3
     for s in range(len(i)):
         a, b = i[s], j[s]
-        f0, f1, f2 = _spring(x, v, a, b, L0[s], k[s], kd[s], damped, three)
+        f0, f1, f2 = spring_pull(x, v, a, b, 0, L0[s], k[s], kd[s], three)
         S[a, 0] += f0
         S[a, 1] += f1
         S[b, 0] -= f0
@@ -82,7 +86,7 @@ def spring_scatter(S, x, v, i, j, L0, k, kd, damped):
 
 
 @jit(parallel=True)
-def springs_in_parallel(F, x, v, i, j, L0, k, kd, damped, f, ptr, col):
+def springs_in_parallel(F, x, v, i, j, L0, k, kd, f, ptr, col):
     """Forces per spring into f (s, 3) in parallel, then ``F_p += (+f where p is first, -f where second)``.
 
     Each particle's sum runs over its springs in increasing order (``col``, by item): the bits of
@@ -91,7 +95,7 @@ def springs_in_parallel(F, x, v, i, j, L0, k, kd, damped, f, ptr, col):
     three = x.shape[1] == 3
     s = len(i)
     for q in prange(s):
-        f[q, 0], f[q, 1], f[q, 2] = _spring(x, v, i[q], j[q], L0[q], k[q], kd[q], damped, three)
+        f[q, 0], f[q, 1], f[q, 2] = spring_pull(x, v, i[q], j[q], 0, L0[q], k[q], kd[q], three)
     for p in prange(len(ptr) - 1):
         a0, a1, a2 = 0.0, 0.0, 0.0
         for e in range(ptr[p], ptr[p + 1]):
@@ -124,7 +128,7 @@ class SpringPass:
         s = len(i)
         if not parallel(s, SPRING_THREADS):
             S = np.zeros_like(F)
-            spring_scatter(S, x, v, i, j, L0, k, kd, damped)
+            spring_scatter(S, x, v, i, j, L0, k, kd)
             F += S
             return
         key = (len(F), id(i), id(j), s)
@@ -132,7 +136,7 @@ class SpringPass:
             self.lists = incidence(np.concatenate([i, j]), len(F), 2, True)
             self.f = np.empty((s, 3))
             self.key = key
-        pick(springs_in_parallel, s)(F, x, v, i, j, L0, k, kd, damped, self.f, *self.lists)
+        pick(springs_in_parallel, s)(F, x, v, i, j, L0, k, kd, self.f, *self.lists)
 
 
 @jit(parallel=True)

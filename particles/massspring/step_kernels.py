@@ -39,11 +39,11 @@ import math
 
 from ..backends.compile import inline, jit, prange
 from ..forces.fields import gust_factor
-from ..forces.springs import TINY, damped_spring_force, joint_factor
+from ..forces.kernels import spring_pull
+from ..forces.springs import joint_factor
 
 __all__ = ["symplectic_euler_steps", "clamp_pass", "GUST", "PHASE", "WAVELENGTH", "PER_MASS"]
 
-inline(damped_spring_force)
 inline(joint_factor)
 inline(gust_factor)
 
@@ -75,25 +75,14 @@ def _block_springs(c, shift, xw, fw, rb0, rowp, rptr, other_end, which, sidx, L0
                 L0, k, kd = L0b[s], kb[s], kdb[s]
             else:
                 L0, k, kd = L0c[s], kc[s], kdc[s]
-            d0 = xw[rx, 0] - xw[ox, 0]
-            d1 = xw[rx, 1] - xw[ox, 1]
-            d2 = xw[rx, 2] - xw[ox, 2] if three else 0.0
-            L = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-            inv_L = 1.0 / max(L, TINY)
-            u0, u1, u2 = d0 * inv_L, d1 * inv_L, d2 * inv_L
-            dL = 0.0
-            if kd != 0.0:  # an undamped spring reads no velocity (kd dL = 0 either way)
-                dL = (xw[rx, dim] - xw[ox, dim]) * u0 + (xw[rx, dim + 1] - xw[ox, dim + 1]) * u1
-                if three:
-                    dL += (xw[rx, 5] - xw[ox, 5]) * u2
-            f = damped_spring_force(L, L0, k, kd, dL)
-            f0 += f * u0
-            f1 += f * u1
-            f2 += f * u2
-            fw[ro, 0] -= f * u0
-            fw[ro, 1] -= f * u1
+            g0, g1, g2 = spring_pull(xw, xw, rx, ox, dim, L0, k, kd, three)
+            f0 += g0
+            f1 += g1
+            f2 += g2
+            fw[ro, 0] -= g0
+            fw[ro, 1] -= g1
             if three:
-                fw[ro, 2] -= f * u2
+                fw[ro, 2] -= g2
         fw[rr, 0] += f0
         fw[rr, 1] += f1
         if three:
@@ -195,7 +184,7 @@ def _block_update(c, start, shift, xw, fw, D, R, W, other, has_other, m, free, G
     return big
 
 
-inline(_larger)
+inline(_larger, into="never")  # a branch: its own function (LLVM inlines it); numba warns on such IR inlining
 
 
 @jit(parallel=True, fastmath={"contract"})  # fused multiply-adds: rounding differs from NumPy's by ~1e-16
