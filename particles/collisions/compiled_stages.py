@@ -48,7 +48,7 @@ _EMPTY_MASK = np.zeros(0, dtype=np.bool_)
 QUERY_WEIGHT = 16
 
 # the Jacobi iterations sum each vertex's terms in slices of at least this many active contacts (at most
-# _jacobi_kernels.BLOCKS, each on one thread): below twice as many, in one slice, in np.bincount's order
+# impulse_kernels.BLOCKS, each on one thread): below twice as many, in one slice, in np.bincount's order
 JACOBI_PART_MIN = 4096
 
 # an unmasked search may take its pairs from the memo of an earlier one when at most one vertex in this many
