@@ -53,14 +53,14 @@ def spring_pull(x, v, a, b, at, L0, k, kd, three):
     d2 = x[a, 2] - x[b, 2] if three else 0.0
     L = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
     inv_L = 1.0 / max(L, TINY)
-    u0, u1, u2 = d0 * inv_L, d1 * inv_L, d2 * inv_L
     dL = 0.0
     if kd != 0.0:  # an undamped spring reads no velocity (kd dL = 0 either way)
-        dL = (v[a, at] - v[b, at]) * u0 + (v[a, at + 1] - v[b, at + 1]) * u1
+        dL = (v[a, at] - v[b, at]) * d0 + (v[a, at + 1] - v[b, at + 1]) * d1
         if three:
-            dL += (v[a, at + 2] - v[b, at + 2]) * u2
-    f = damped_spring_force(L, L0, k, kd, dL)
-    return f * u0, f * u1, f * u2
+            dL += (v[a, at + 2] - v[b, at + 2]) * d2
+        dL *= inv_L
+    w = damped_spring_force(L, L0, k, kd, dL) * inv_L  # f u = w d
+    return w * d0, w * d1, w * d2
 
 
 inline(spring_pull)

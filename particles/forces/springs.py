@@ -81,16 +81,16 @@ def spring_forces(F, x, v, i, j, L0, k, kd):
         Rest lengths (m), stiffnesses (N/m) and damping along the springs (kg/s).
     """
     n, dim = x.shape
-    d = [x[i, a] - x[j, a] for a in range(dim)]  # x_i - x_j, coordinate by coordinate (the columns of x)
-    L = np.sqrt(sum(da * da for da in d))
-    inv_L = 1.0 / np.maximum(L, TINY)
-    u = [da * inv_L for da in d]
+    d = pair_differences(x, i, j)  # x_i - x_j, one row per coordinate: shape (d, s)
+    L = np.sqrt(np.einsum("as,as->s", d, d))
+    inv_L = 1.0 / np.maximum(L, TINY)  # u = d / L (and no force from a spring of length 0)
     dL = 0.0  # (v_i - v_j) . u: read only for damped springs
     if np.any(kd):
-        dL = sum((v[i, a] - v[j, a]) * u[a] for a in range(dim))
+        dL = np.einsum("as,as->s", pair_differences(v, i, j), d) * inv_L
     f = damped_spring_force(L, L0, k, kd, dL)
+    w = f * inv_L  # f u = w d
     for a in range(dim):  # a loop over the d coordinates: F_i += f u, F_j -= f u
-        fa = f * u[a]
+        fa = w * d[a]
         F[:, a] += np.bincount(i, fa, minlength=n) - np.bincount(j, fa, minlength=n)
 
 
