@@ -68,10 +68,19 @@ class ProjectionResult:
 def provot_excess(L, L0, max_strain):
     """How much a spring must shorten: ``max(L - (1 + s) L0, 0)``, in metres (0 when it holds).
 
+    Parameters
+    ----------
+    L, L0 : float or ndarray
+        Length and rest length, in metres.
+    max_strain : float or ndarray
+        ``s``: the stretch allowed, as a fraction of ``L0``.
+
     Examples
     --------
-    >>> provot_excess(1.3, 1.0, 0.1)     # 30% long, 10% allowed: shorten by 0.2 m
-    0.2
+    >>> float(provot_excess(1.5, 1.0, 0.25))     # 50% long, 25% allowed: shorten by 0.25 m
+    0.25
+    >>> float(provot_excess(1.1, 1.0, 0.25))     # within the limit
+    0.0
     """
     return np.maximum(L - (1.0 + max_strain) * L0, 0.0)
 
