@@ -91,7 +91,8 @@ Modules
 -------
 * :mod:`particles.backends.compile`: the compile wrapper (:func:`~particles.backends.compile.jit`,
   :func:`~particles.backends.compile.inline`), numba's threads and the cache;
-* :mod:`particles.backends.layout`: the layouts the kernels share (compressed-row incidence lists).
+* :mod:`particles.backends.layout`: the layouts the kernels share (compressed-row incidence lists, a state
+  in C order, work arrays kept between calls).
 
 Examples
 --------
