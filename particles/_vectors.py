@@ -86,6 +86,11 @@ def select(condition, a, b):
     return np.where(condition, a, b)
 
 
+def any_of(condition):
+    """Whether `condition` holds anywhere: ``np.any`` on arrays; in a compiled kernel, the one bool itself."""
+    return bool(np.any(condition))
+
+
 def vdot(a, b):
     """``a . b`` of 3-tuples, summed in coordinate order (as :func:`rowdot`)."""
     return (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2]

@@ -38,7 +38,7 @@ import types
 import warnings
 from pathlib import Path
 
-from .._vectors import select, vadd, vcross, vdot, vscale, vselect, vsub
+from .._vectors import any_of, select, vadd, vcross, vdot, vscale, vselect, vsub
 
 try:
     import numba
@@ -156,12 +156,16 @@ _INLINED = set()
 
 
 def _register_vector_helpers():
-    """The tuple helpers of :mod:`particles._vectors` callable in kernels; :func:`~particles._vectors.select` a branch."""
+    """The tuple helpers of :mod:`particles._vectors` callable in kernels; ``select`` a branch, ``any_of`` the bool."""
     from numba.extending import overload  # noqa: PLC0415
 
     @overload(select)
     def _select(condition, a, b):
         return lambda condition, a, b: a if condition else b
+
+    @overload(any_of)
+    def _any_of(condition):
+        return lambda condition: condition
 
     for helper in (vdot, vsub, vadd, vcross, vscale, vselect):
         inline(helper)

@@ -59,7 +59,7 @@ import numpy as np
 from .._checks import as_float_array, nonnegative_number, positive_number
 from .candidates import candidate_pairs
 from .mesh import TriangleMesh
-from .._vectors import select, vcross, vdot, vselect, vsub
+from .._vectors import any_of, select, vcross, vdot, vselect, vsub
 from .proximity import PARALLEL, dot, edge_edge_kernel, unit_or, vertex_face_kernel
 
 __all__ = ["cubic_roots", "coplanarity_cubic", "Impacts", "candidates", "overlapping", "first_contact", "detect",
@@ -112,7 +112,7 @@ def piece_root(a, b, c, d, lo, hi, tol, bisections):
     change = used & (np.sign(flo) * np.sign(fhi) < 0) & ~zlo & ~zhi
     L, H = lo, hi
     up = flo < 0  # f increases from lo to hi on this piece
-    for _ in range(bisections):  # a loop over bisection steps (in NumPy, all pieces at once)
+    for _ in range(bisections if any_of(change) else 0):  # bisection steps (in NumPy, all pieces at once)
         mid = 0.5 * (L + H)
         below = (horner(a, b, c, d, mid) < 0) == up  # the root lies above mid
         L, H = select(below, mid, L), select(below, H, mid)

@@ -17,15 +17,33 @@ import numpy as np
 from .._vectors import vdot, vsub
 from ..backends.compile import inline, jit, prange
 from .ccd import bernstein, cubic_of, cubic_unit_roots, horner, impact_normal, piece_root, sorted_nan_last, triple
-from .proximity import (any_perpendicular, approaching_within, clip01, segment_closest, segments_closest,
-                        triangle_closest, unit_or)
+from .proximity import (any_perpendicular, approaching_within, clip01, nearest_edge_weights, normal_or, plane_weights,
+                        segment_closest, segments_closest, triangle_contact, unit_or)
 
-for _law in (clip01, unit_or, any_perpendicular, segment_closest, triangle_closest, segments_closest,
-             approaching_within, triple, cubic_of, bernstein, horner, sorted_nan_last, impact_normal):
+for _law in (clip01, unit_or, any_perpendicular, segment_closest, plane_weights, nearest_edge_weights, triangle_contact,
+             segments_closest, approaching_within, triple, cubic_of, bernstein, horner, sorted_nan_last, impact_normal):
     inline(_law)
 for _law in (piece_root, cubic_unit_roots):  # laws with a loop: a function of their own, which LLVM inlines
     inline(_law, into="never")
 
+
+
+def _register_normal_or():
+    """:func:`~particles.collisions.proximity.normal_or` in a kernel: its fallbacks computed only where used."""
+    from numba.extending import overload  # noqa: PLC0415
+
+    @overload(normal_or)
+    def _normal_or(v, n, g):
+        def lazy(v, n, g):
+            if vdot(v, v) > 0:
+                return unit_or(v, v)
+            if vdot(n, n) > 0:
+                return unit_or(n, n)
+            return any_perpendicular(g)
+        return lazy
+
+
+_register_normal_or()
 
 def row3(x, i):
     return (x[i, 0], x[i, 1], x[i, 2])
@@ -33,10 +51,14 @@ def row3(x, i):
 
 def closest(P0, P1, P2, P3, edge, parallel_tol):
     """The closest points of a pair: :func:`~particles.collisions.proximity.segments_closest` or
-    :func:`~particles.collisions.proximity.triangle_closest`."""
+    :func:`~particles.collisions.proximity.triangle_closest` (its parts, the edges only when needed)."""
     if edge:
         return segments_closest(P0, P1, P2, P3, parallel_tol)
-    return triangle_closest(P0, P1, P2, P3)
+    inside, alpha, beta, gamma = plane_weights(P0, P1, P2, P3)
+    if inside:
+        return triangle_contact(P0, P1, P2, P3, alpha, beta, gamma)
+    w0, w1, w2 = nearest_edge_weights(P0, P1, P2, P3)
+    return triangle_contact(P0, P1, P2, P3, w0, w1, w2)
 
 
 def pair_points(x, rows, k):
@@ -54,23 +76,17 @@ def combine(W, x, rows, k):
     return (out0, out1, out2)
 
 
-def closest_row(x, rows, k, edge, parallel_tol, distance, normal, weights):
-    """The closest points of pair `k`, written into row `k` of `distance`, `normal`, `weights` and returned."""
-    P0, P1, P2, P3 = pair_points(x, rows, k)
-    dist, n, W = closest(P0, P1, P2, P3, edge, parallel_tol)
-    distance[k] = dist
-    for a in range(3):
-        normal[k, a] = n[a]
-    for j in range(4):
-        weights[k, j] = W[j]
-    return dist, n, W
-
-
 @jit(parallel=True)
 def closest_pairs(x, rows, edge, parallel_tol, distance, normal, weights):
     """Closest points of every pair `rows` (k, 4) into `distance` (k,), `normal` (k, 3), `weights` (k, 4)."""
     for k in prange(len(rows)):
-        closest_row(x, rows, k, edge, parallel_tol, distance, normal, weights)
+        P0, P1, P2, P3 = pair_points(x, rows, k)
+        dist, n, W = closest(P0, P1, P2, P3, edge, parallel_tol)
+        distance[k] = dist
+        for a in range(3):
+            normal[k, a] = n[a]
+        for j in range(4):
+            weights[k, j] = W[j]
 
 
 @jit(parallel=True)
@@ -78,7 +94,13 @@ def proximity_rows(x0, vbar, w, xr, rest, rows, edge, h, thickness, rest_distanc
                    normal, weights):
     """The proximity tests of ``ClothCollisions._proximity_contacts`` per candidate pair, into `keep` and the rest."""
     for k in prange(len(rows)):
-        dist, n, W = closest_row(x0, rows, k, edge, parallel_tol, distance, normal, weights)
+        P0, P1, P2, P3 = pair_points(x0, rows, k)
+        dist, n, W = closest(P0, P1, P2, P3, edge, parallel_tol)
+        distance[k] = dist
+        for a in range(3):
+            normal[k, a] = n[a]
+        for j in range(4):
+            weights[k, j] = W[j]
         vN = vdot(n, combine(W, vbar, rows, k))
         ok = approaching_within(dist, vN, h, thickness)
         eff = 0.0
@@ -174,5 +196,5 @@ def first_contact_pairs(x0, dx, rows, edge, eta, f_tol, bisections, parallel_tol
 
 
 # helpers compiled into the kernels, each a function of its own
-for _helper in (row3, closest, pair_points, closest_row, combine, rest_far, moved_point, at_time):
+for _helper in (row3, closest, pair_points, combine, rest_far, moved_point, at_time):
     inline(_helper, into="never")

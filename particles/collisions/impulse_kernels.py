@@ -104,8 +104,9 @@ def _slice_velocities(b, size, m, order, V, W, w, impulse, part_vel):
                 part_vel[b, v, 2] += scale * impulse[i, 2]
 
 
-for _helper in (row4, _mark_active, _slice_loads, _impulse, _slice_velocities):  # compiled into proximity_impulses
-    inline(_helper)
+inline(row4)
+for _helper in (_mark_active, _slice_loads, _impulse, _slice_velocities):  # loops and branches: functions of their own
+    inline(_helper, into="never")
 
 
 @jit(parallel=True)

@@ -51,6 +51,7 @@ from .._checks import as_float_array
 from .._vectors import select, vadd, vcross, vdot, vscale, vselect, vsub
 
 __all__ = ["Closest", "point_segment", "vertex_face", "edge_edge", "PARALLEL", "segment_closest", "triangle_closest",
+           "plane_weights", "nearest_edge_weights", "triangle_contact", "normal_or",
            "segments_closest", "approaching_within"]
 # The kernels (dot, unit_or, vertex_face_kernel, edge_edge_kernel) skip the checks, for the collision stages
 # that call them on every step.
@@ -103,6 +104,15 @@ def any_perpendicular(d):
     return unit_or(vcross(d, axis), (0.0, 0.0, 1.0))
 
 
+def normal_or(v, n, g):
+    """The 3-tuple `v` over its length; where that is zero, `n`'s; where that is zero too, ``any_perpendicular(g)``.
+
+    The compiled kernels compute each fallback only where it is used
+    (:mod:`particles.collisions.contact_kernels`).
+    """
+    return unit_or(v, unit_or(n, any_perpendicular(g)))
+
+
 def segment_closest(p, a, b):
     """Parameter ``s`` of the point ``(1 - s) a + s b`` of a segment closest to `p`, and the distance (3-tuples)."""
     d = vsub(b, a)
@@ -113,37 +123,61 @@ def segment_closest(p, a, b):
     return s, np.sqrt(vdot(r, r))
 
 
-def triangle_closest(p, a, b, c):
-    """Closest points of a vertex `p` and a triangle ``(a, b, c)`` (3-tuples): distance, normal, four weights.
+def plane_weights(p, a, b, c):
+    """Barycentric weights ``(alpha, beta, gamma)`` of the projection of `p` on the plane of ``(a, b, c)``.
 
-    The projection on the triangle's plane when it lies inside (barycentric weights by Cramer's
-    rule), else the nearest of the three edges; the normal from the triangle's point to `p`, or the
-    triangle's normal where they touch. The law of :func:`vertex_face` for one pair, which the
-    compiled stages inline (:mod:`particles.collisions.contact_kernels`).
+    3-tuples in; also whether the projection lies inside the triangle (a triangle with a plane, not a
+    sliver or a point: Cramer's rule on the edges ``e1 = b - a``, ``e2 = c - a``).
     """
     e1, e2 = vsub(b, a), vsub(c, a)
     nrm = vcross(e1, e2)
     area2 = vdot(nrm, nrm)
     scale2 = np.maximum(vdot(e1, e1), vdot(e2, e2))
-    flat = area2 > 1e-14 * scale2 * scale2  # a triangle with a plane (not a sliver or a point)
+    flat = area2 > 1e-14 * scale2 * scale2
     r = vsub(p, a)
     safe = select(flat, area2, 1.0)
     beta = select(flat, vdot(vcross(r, e2), nrm) / safe, -1.0)
     gamma = select(flat, vdot(vcross(e1, r), nrm) / safe, -1.0)
     alpha = 1.0 - beta - gamma
-    inside = flat & (alpha >= 0) & (beta >= 0) & (gamma >= 0)
-    s_ab, d_ab = segment_closest(p, a, b)  # otherwise the closest of the three edges (the first on ties)
+    return flat & (alpha >= 0) & (beta >= 0) & (gamma >= 0), alpha, beta, gamma
+
+
+def nearest_edge_weights(p, a, b, c):
+    """Weights ``(w0, w1, w2)`` of the point ``w0 a + w1 b + w2 c`` of the triangle's edges nearest `p` (the first on ties)."""
+    s_ab, d_ab = segment_closest(p, a, b)
     s_bc, d_bc = segment_closest(p, b, c)
     s_ca, d_ca = segment_closest(p, c, a)
     bc = (d_bc < d_ab) & (d_bc <= d_ca)
     ca = (d_ca < d_ab) & (d_ca < d_bc)
-    w0 = select(inside, alpha, select(bc, 0.0, select(ca, s_ca, 1.0 - s_ab)))
-    w1 = select(inside, beta, select(bc, 1.0 - s_bc, select(ca, 0.0, s_ab)))
-    w2 = select(inside, gamma, select(bc, s_bc, select(ca, 1.0 - s_ca, 0.0)))
+    return (select(bc, 0.0, select(ca, s_ca, 1.0 - s_ab)), select(bc, 1.0 - s_bc, select(ca, 0.0, s_ab)),
+            select(bc, s_bc, select(ca, 1.0 - s_ca, 0.0)))
+
+
+def triangle_contact(p, a, b, c, w0, w1, w2):
+    """Distance, normal and four weights of `p` and the triangle's point ``q = w0 a + w1 b + w2 c``.
+
+    The normal points from ``q`` to `p`, or is the triangle's normal where they touch.
+    """
+    e1, e2 = vsub(b, a), vsub(c, a)
     q = vadd(vadd(vscale(w0, a), vscale(w1, b)), vscale(w2, c))
     d = vsub(p, q)
-    normal = unit_or(d, unit_or(nrm, any_perpendicular(vadd(e1, e2))))
+    normal = normal_or(d, vcross(e1, e2), vadd(e1, e2))
     return np.sqrt(vdot(d, d)), normal, (1.0, -w0, -w1, -w2)
+
+
+def triangle_closest(p, a, b, c):
+    """Closest points of a vertex `p` and a triangle ``(a, b, c)`` (3-tuples): distance, normal, four weights.
+
+    The projection on the triangle's plane when it lies inside (:func:`plane_weights`), else the
+    nearest point of the three edges (:func:`nearest_edge_weights`); then :func:`triangle_contact`.
+    The law of :func:`vertex_face` for one pair; the compiled stages
+    (:mod:`particles.collisions.contact_kernels`) inline its three parts, and look for the nearest
+    edge only when the projection is outside.
+    """
+    inside, alpha, beta, gamma = plane_weights(p, a, b, c)
+    w0, w1, w2 = nearest_edge_weights(p, a, b, c)
+    return triangle_contact(p, a, b, c, select(inside, alpha, w0), select(inside, beta, w1),
+                            select(inside, gamma, w2))
 
 
 def segments_closest(p1, p2, q1, q2, parallel_tol):
@@ -168,7 +202,7 @@ def segments_closest(p1, p2, q1, q2, parallel_tol):
     s = select(parallel, s, clip01(select(a > 0, (b * u - c) / a_safe, 0.0)))
     dv = vsub(vadd(p1, vscale(s, d1)), vadd(q1, vscale(u, d2)))
     g = vadd(d1, vscale(1.0 * (a == 0), d2))
-    normal = unit_or(dv, unit_or(vcross(d1, d2), any_perpendicular(g)))
+    normal = normal_or(dv, vcross(d1, d2), g)
     return np.sqrt(vdot(dv, dv)), normal, (1.0 - s, s, u - 1.0, -u)
 
 

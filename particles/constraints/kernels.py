@@ -98,8 +98,9 @@ def _correct(q, X, i, j, L0, wi, wj, movable, max_strain):
             X[j[q], 0, 2] += wj[q] * c2
 
 
-for _helper in (_length, _block_strains, _average, _correct):  # compiled into provot_passes
-    inline(_helper)
+inline(_length)
+for _helper in (_block_strains, _average, _correct):  # loops and branches: functions of their own (see inline)
+    inline(_helper, into="never")
 
 
 @jit(parallel=True)

@@ -42,6 +42,12 @@ inline(lennard_jones_virial)
 SPRING_THREADS = 4
 
 
+def relative_speed(v, a, b, at, d0, d1, d2, three):
+    """``(v_a - v_b) . d``, the velocities in the columns from `at` of rows `a` and `b` of `v`."""
+    s = (v[a, at] - v[b, at]) * d0 + (v[a, at + 1] - v[b, at + 1]) * d1
+    return s + (v[a, at + 2] - v[b, at + 2]) * d2 if three else s
+
+
 def spring_pull(x, v, a, b, at, L0, k, kd, three):
     """Spring (a, b)'s force on a, ``f u`` (three components, the third 0 in 2D): the arithmetic of spring_forces.
 
@@ -53,16 +59,12 @@ def spring_pull(x, v, a, b, at, L0, k, kd, three):
     d2 = x[a, 2] - x[b, 2] if three else 0.0
     L = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
     inv_L = 1.0 / max(L, TINY)
-    dL = 0.0
-    if kd != 0.0:  # an undamped spring reads no velocity (kd dL = 0 either way)
-        dL = (v[a, at] - v[b, at]) * d0 + (v[a, at + 1] - v[b, at + 1]) * d1
-        if three:
-            dL += (v[a, at + 2] - v[b, at + 2]) * d2
-        dL *= inv_L
+    dL = relative_speed(v, a, b, at, d0, d1, d2, three) * inv_L if kd != 0.0 else 0.0  # kd dL = 0 either way
     w = damped_spring_force(L, L0, k, kd, dL) * inv_L  # f u = w d
     return w * d0, w * d1, w * d2
 
 
+inline(relative_speed)
 inline(spring_pull)
 
 

@@ -61,8 +61,9 @@ def _larger(big, value):
 
 @jit(fastmath={"contract"})
 def _block_springs(c, shift, xw, fw, rb0, rowp, rptr, other_end, which, sidx, L0a, ka, kda, L0b, kb, kdb, L0c,
-                   kc, kdc, dim):
+                   kc, kdc, G):
     """Block c's spring rows: each row's force summed in registers, the other ends' into their rows of fw."""
+    dim = len(G)  # G is a tuple: a constant, so that the third coordinate's code is left out in 2D
     three = dim == 3
     for u in range(rb0[c], rb0[c + 1]):
         rr, rx = rowp[u] + shift, rowp[u]
@@ -90,9 +91,9 @@ def _block_springs(c, shift, xw, fw, rb0, rowp, rptr, other_end, which, sidx, L0
 
 
 @jit(fastmath={"contract"})
-def _block_joints(c, shift, xw, fw, jb0, joints, bi, bj, bl, bkb, btheta0, dim):
+def _block_joints(c, shift, xw, fw, jb0, joints, bi, bj, bl, bkb, btheta0, G):
     """The joints touching block c: each one's forces on its three particles into their rows of fw."""
-    three = dim == 3
+    three = len(G) == 3  # G is a tuple: a constant
     for e in range(jb0[c], jb0[c + 1]):  # e1 = x_j - x_i, e2 = x_l - x_j
         t = joints[e]
         ri, rj, rl = bi[t], bj[t], bl[t]
@@ -230,8 +231,8 @@ def symplectic_euler_steps(start, lo, hi, row0, xw, fw, rb0, rowp, rptr, other_e
                 for a in range(dim):
                     fw[p + shift, a] = 0.0
             _block_springs(c, shift, rows, fw, rb0, rowp, rptr, other_end, which, sidx, L0a, ka, kda, L0b, kb, kdb,
-                           L0c, kc, kdc, dim)
-            _block_joints(c, shift, rows, fw, jb0, joints, bi, bj, bl, bkb, btheta0, dim)
+                           L0c, kc, kdc, G)
+            _block_joints(c, shift, rows, fw, jb0, joints, bi, bj, bl, bkb, btheta0, G)
             sizes[c] = _block_update(c, start, shift, rows, fw, D, R, Ws, other, has_other, m, free, G, h, dst)
         size = 0.0
         for c in range(len(sizes)):  # a loop over the blocks, in order

@@ -284,7 +284,7 @@ KERNEL_LAWS = {
     "particles.collisions.body_kernels.body_vertices": "particles.collisions.response.friction_change",
     "particles.collisions.body_kernels.low_edge_samples": "particles.collisions.surfaces.box_height",
     "particles.collisions.impulse_kernels.proximity_impulses": "particles.collisions.response.proximity_impulse",
-    "particles.collisions.contact_kernels.closest_pairs": "particles.collisions.proximity.triangle_closest",
+    "particles.collisions.contact_kernels.closest_pairs": "particles.collisions.proximity.triangle_contact",
     "particles.collisions.contact_kernels.proximity_rows": "particles.collisions.proximity.approaching_within",
     "particles.collisions.contact_kernels.first_contact_pairs": "particles.collisions.ccd.cubic_of",
     "particles.collisions.broad_kernels.box_candidates": "particles.collisions.triangle_crossing.intervals_overlap",
