@@ -51,7 +51,7 @@ demo: $(VENV)/.installed
 	$(BYTECODE)
 	$(BIN)/particles tour --out $(OUT)
 
-# System tools the tests need (headless Chromium for the course-site tests), installed once, here,
+# System tools the tests need (headless Chromium for the course-site tests, PHP for the Moodle import), installed once, here,
 # before any test runs: never by test workers racing for the package manager's lock
 $(VENV)/.system-tools: .ci/install-system-tools | $(BIN)/python
 	sh .ci/install-system-tools

@@ -71,7 +71,7 @@ def executed_lecture(tmp_path_factory, request):
         key = str(path)
         if key not in cache:
             while not done(path) and not produce(path, wait=False):
-                others = (p for p in sorted(path.parent.glob("[0-9][0-9]_*.ipynb")) if p != path and not done(p))
+                others = (p for p in sorted(path.parent.glob("[0-9A][0-9]_*.ipynb")) if p != path and not done(p))
                 if not any(produce(p, wait=False) for p in others):  # nothing else to run: wait for it
                     produce(path, wait=True)
             target, failure = files(path)

@@ -36,7 +36,9 @@ the continuous test and the broad phase (``from particles.collisions import Coll
   :mod:`particles.collisions.impulse_kernels` (the proximity impulses' Jacobi iterations),
   :mod:`particles.collisions.body_kernels` (the cloth against bodies at rest);
 * :mod:`particles.collisions.selfcollision`: :class:`SelfCollision`, a mass-spring cloth's particles kept a
-  thickness apart.
+  thickness apart;
+* :mod:`particles.collisions.resting`: :class:`BallContacts`, balls resting on a surface and on each other (a
+  stack) without chatter: collisions bounce, resting contacts are only closed.
 """
 
 from .ccd import BISECTIONS, F_TOL, Impacts, coplanarity_cubic, cubic_roots, detect, first_contact, overlapping
@@ -46,6 +48,7 @@ from .moving import MovingSurface, RigidlyMoved, rotation_matrix
 from .pipeline import ClothCollisionResult, ClothCollisions
 from .proximity import PARALLEL, Closest, edge_edge, point_segment, vertex_face
 from .response import respond
+from .resting import BallContacts, ContactImpulses
 from .selfcollision import SelfCollision, SelfCollisionResult
 from .surface_crossing import cubic_path, first_crossing, hermite, hermite_coefficients, path_speed
 from .surfaces import Box, Complement, Cylinder, Intersection, Plane, Sphere, Surface, Union
@@ -56,4 +59,5 @@ __all__ = ["Surface", "Plane", "Sphere", "Box", "Cylinder", "Union", "Intersecti
            "first_crossing", "respond", "Contacts", "Collider", "TriangleMesh", "intersections", "box_pairs",
            "orientation", "intervals_overlap", "Closest", "point_segment", "vertex_face", "edge_edge", "PARALLEL", "cubic_roots",
            "coplanarity_cubic", "Impacts", "overlapping", "first_contact", "detect", "BISECTIONS", "F_TOL",
-           "ClothCollisions", "ClothCollisionResult", "SelfCollision", "SelfCollisionResult"]
+           "ClothCollisions", "ClothCollisionResult", "SelfCollision", "SelfCollisionResult", "BallContacts",
+           "ContactImpulses"]

@@ -12,8 +12,10 @@ Packages, in the order the data flows (each ``__init__`` docstring maps its modu
   a uid of its own, Landlock, limits) and the Python-level ones (audit hook, tripwires);
 * :mod:`~particles.course.grading`: ``particles grade`` (the driver), the pytest plugin, which
   notebooks are graded, the checks tests use and whose fault a failure is;
-* :mod:`~particles.course.results`: typed records, their store and signatures, the reports
-  (gradebook, feedback, Gradescope ``results.json``) and the Gradescope bundle;
+* :mod:`~particles.course.results`: typed records and their signatures, the reports (gradebook, feedback,
+  Gradescope ``results.json``), the LMS files and the Gradescope bundle;
+* :mod:`~particles.course.term`: the term's record (one SQLite database per output folder), the roster and
+  every name matched to a student;
 * :mod:`~particles.course.similarity`: ``particles similarity``, structurally equal solutions.
 
 Modules at this level: :mod:`~particles.course.check` (``particles.check(...)`` from a student's

@@ -258,8 +258,8 @@ def check(exercise, notebook=None, *, time_limit=None, root=None):
         message says what to do. The check never reports a pass it did not test.
     """
     from .release.answers import answers_note
-    from .grading.discovery import written_answers
-    from .grading.driver import Unit, grade_unit
+    from .grading.discovery import Unit, written_answers
+    from .grading.session import grade_unit
 
     root = Path(root) if root else project_root()
     tests = exercise_tests(root)

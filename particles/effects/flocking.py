@@ -77,7 +77,8 @@ class Boids(Force):
     radius : float
         Neighbourhood radius ``R``, in metres.
     separation, alignment, cohesion : float
-        Weights, >= 0, in m^3/s^2, 1/s and 1/s^2 (0 switches a rule off).
+        Weights, >= 0, in m^2/s^2, 1/s and 1/s^2 (0 switches a rule off): the separation
+        acceleration ``separation / r`` (m/s^2) needs m^2/s^2 for a distance ``r`` in metres.
     separation_radius : float, optional
         ``R_s``: only neighbours closer than this push away (default ``R / 2``).
     view_angle : float, optional

@@ -23,6 +23,8 @@ Reynolds' boids are in :mod:`particles.effects.flocking`.
 * :mod:`particles.forces.nbody`: :class:`NBodyGravity`, all pairs;
 * :mod:`particles.forces.lennardjones`: :class:`LennardJones`, short range on the bucket grid
   (:mod:`particles.neighbors`);
+* :mod:`particles.forces.surfacewind`: :class:`SurfaceWind`, Provot's wind on the triangles of a surface
+  (along each normal, from the air's velocity relative to it).
 * :mod:`particles.forces.kernels`: the compiled loops of springs, bending, Lennard-Jones and N-body gravity,
   each inlining its law (loaded only when a force's backend resolves to numba).
 
@@ -41,6 +43,8 @@ from .nbody import NBodyGravity
 from .pairs import pair_differences
 from .spring_sets import Bending, Clamp, Springs
 from .springs import damped_spring_force, spring_jacobian_blocks
+from .surfacewind import SurfaceWind
 
 __all__ = ["Force", "Gravity", "Damping", "Wind", "Attractor", "Vortex", "Field", "Springs", "Bending", "Clamp",
-           "NBodyGravity", "LennardJones", "pair_differences", "damped_spring_force", "spring_jacobian_blocks"]
+           "NBodyGravity", "LennardJones", "SurfaceWind", "pair_differences", "damped_spring_force",
+           "spring_jacobian_blocks"]

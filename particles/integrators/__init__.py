@@ -13,13 +13,17 @@ As SciPy groups ``integrate/_ivp``: the methods, what they share, and the driver
   divergence guard;
 * :mod:`particles.integrators.solvers`: the stepper and solver forms of a method (:class:`Solver`,
   :func:`as_stepper`), :func:`after`, which wraps a method with a fix, and :func:`rewrap`, the same fixes
-  around another innermost step.
+  around another innermost step;
+* :mod:`particles.integrators.adaptive`: :func:`step_doubling`, a run whose step adapts to an error estimate
+  (one step of ``h`` against two of ``h/2``).
 """
 
+from .adaptive import AdaptiveRun, step_doubling
 from .loop import BLOWUP_FACTOR, integrate, step_times
 from .implicit_euler import implicit_euler
 from .solvers import Solver, after, as_stepper, is_solver, rewrap
 from .steppers import INTEGRATORS, euler, midpoint, rk4, symplectic_euler, trapezoid, verlet
 
 __all__ = ["euler", "midpoint", "trapezoid", "rk4", "symplectic_euler", "verlet", "implicit_euler", "INTEGRATORS",
-           "integrate", "step_times", "BLOWUP_FACTOR", "Solver", "as_stepper", "is_solver", "after", "rewrap"]
+           "integrate", "step_times", "BLOWUP_FACTOR", "Solver", "as_stepper", "is_solver", "after", "rewrap",
+           "step_doubling", "AdaptiveRun"]

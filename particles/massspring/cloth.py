@@ -178,7 +178,11 @@ def cloth(nx=16, ny=16, width=1.0, height=1.0, *, pins="top corners", plane="ver
     damping : float
         Viscous damping: kg/s per particle (naive) or 1/s per unit mass (physical).
     wind : array_like, shape (3,), optional
-        Wind acceleration (m/s^2), applied per unit mass.
+        Wind acceleration (m/s^2), applied per unit mass: a uniform field,
+        gravity turned sideways, whatever the sheet's orientation or speed.
+        For wind that presses on the surface along its normal with the
+        relative velocity (Provot's), add a
+        :class:`~particles.forces.SurfaceWind` to the system's forces.
 
     Returns
     -------

@@ -186,7 +186,10 @@ def pbd_stiffness(k, m, hs):
 
 
 def _pbd(c, k, hs, **options):
-    """A PBD solver for curtain c whose stiffness matches springs k, k/4, k/10 at one iteration of hs."""
+    """A PBD solver for curtain c whose stiffness matches springs k, k/4, k/10 at one iteration of hs.
+
+    ``corrected=True`` among the options scales it for the iteration count (:class:`~particles.xpbd.PBD`).
+    """
     solver = PBD.from_system(c, **options)
     for s in solver.constraints:  # a loop over the three spring kinds
         s.stiffness[:] = pbd_stiffness({"structural": k, "shear": k / 4, "flexion": k / 10}[s.kind], c.m[0], hs)
@@ -194,7 +197,7 @@ def _pbd(c, k, hs, **options):
 
 
 def stiffness_study(iterations=(1, 10, 50), steps=(1 / 30, 1 / 60, 1 / 120, 1 / 240), substeps=5, k=30.0,
-                    h=1 / 60, n=12):
+                    h=1 / 60, n=12, corrected=False):
     """Effective stiffness of the constrained curtain against iterations and against the time step.
 
     Parameters
@@ -213,14 +216,18 @@ def stiffness_study(iterations=(1, 10, 50), steps=(1 / 30, 1 / 60, 1 / 120, 1 / 
         Time step of the iteration sweep, in seconds.
     n : int
         Particles per side.
+    corrected : bool
+        Also sweep the iterations with PBD's iteration-corrected stiffness
+        (``"pbd_corrected"`` in ``"by_iterations"``, Müller et al.'s section 3.3).
 
     Returns
     -------
     dict
         ``"k"``, ``"iterations"``, ``"steps"``, ``"substeps"``, ``"h"``;
         ``"by_iterations"`` and ``"by_step"``: dicts ``"xpbd"``/``"pbd"`` ->
-        effective stiffnesses (N/m), one per entry; ``"spring_sag"``: the
-        springs' sag (m); ``"table"``: ``(ks, sags)``.
+        effective stiffnesses (N/m), one per entry (and ``"pbd_corrected"`` in
+        ``"by_iterations"`` with `corrected`); ``"spring_sag"``: the springs'
+        sag (m); ``"table"``: ``(ks, sags)``.
     """
     k = positive_number(k, "k", "N/m")
     substeps = count(substeps, "substeps", 1)
@@ -237,6 +244,11 @@ def stiffness_study(iterations=(1, 10, 50), steps=(1 / 30, 1 / 60, 1 / 120, 1 / 
         out["by_iterations"][name] = [effective_stiffness(settled_sag(make(count(i, "iterations", 1), h), start, h),
                                                           table) for i in iterations]
         out["by_step"][name] = [effective_stiffness(settled_sag(make(1, s), start, s), table) for s in steps]
+    if corrected:
+        c = curtain(k, n, pins="top edge")
+        solvers = [_pbd(c, k, h / substeps, substeps=substeps, iterations=count(i, "iterations", 1), corrected=True)
+                   for i in iterations]
+        out["by_iterations"]["pbd_corrected"] = [effective_stiffness(settled_sag(s, start, h), table) for s in solvers]
     return out
 
 

@@ -12,6 +12,8 @@ As Newton's ``solvers/xpbd``: the constraints, the solver, and its kernels besid
 * :mod:`particles.xpbd.from_springs`: :func:`constraints_from_system`, a mass-spring system's springs as
   constraints;
 * :mod:`particles.xpbd.solver`: :class:`XPBD` and :class:`PBD`, the substepped solvers;
+* :mod:`particles.xpbd.stiffness`: PBD's stiffness corrected for the iteration count
+  (:func:`iteration_corrected`, ``PBD(..., corrected=True)``);
 * :mod:`particles.xpbd.compiled_substep`: a Gauss-Seidel substep in one compiled call (imports numba);
 * :mod:`particles.xpbd.kernels`: the compiled projections, inlining :func:`multiplier_step`.
 """
@@ -20,6 +22,8 @@ from .constraint_sets import Attachment, ConstraintSet, Distance, IsometricBendi
 from .distance import distance_constraint, distance_pass, multiplier_step
 from .from_springs import constraints_from_system
 from .solver import PBD, XPBD
+from .stiffness import iteration_corrected
 
 __all__ = ["XPBD", "PBD", "Distance", "IsometricBending", "IsometricClamp", "Attachment", "ConstraintSet",
-           "constraints_from_system", "distance_pass", "distance_constraint", "multiplier_step"]
+           "constraints_from_system", "distance_pass", "distance_constraint", "multiplier_step",
+           "iteration_corrected"]

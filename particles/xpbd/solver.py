@@ -54,9 +54,16 @@ crumpled cloth the two differ by about 1e-4 of a spring length).
 
 **Substeps.** Macklin et al. (2019) found that at equal cost, many substeps of
 one iteration each beat few substeps with many iterations: each substep
-starts from a better prediction, the error of a nonlinear Gauss-Seidel sweep
-shrinks with ``hs^2``, and the numerical damping of unconverged iterations
-disappears.
+starts from a better prediction and the error of a nonlinear Gauss-Seidel
+sweep shrinks with ``hs^2``, so the constraints end closer to solved (less
+stretch). The energy is another matter: converged, an XPBD substep is a
+backward-Euler step of the constraints' energy, and backward Euler
+multiplies the amplitude of a vibration of frequency ``omega`` by
+``1 / sqrt(1 + (omega hs)^2)`` per step (lecture 7), so one large step
+iterated to convergence loses as much energy as backward Euler at that step.
+Unconverged iterations make the material softer, not more damped; substeps
+lose less energy because each implicit step is smaller (lecture 8 measures
+both).
 
 **Constraints** (each a vectorized set, :mod:`particles.xpbd.constraint_sets`):
 :class:`Distance` (strings, hair and cloth springs), :class:`IsometricBending`
@@ -86,6 +93,7 @@ from .._checks import as_float_array, count, pinned_indices, positive_number
 from ..backends import check_backend, compiled
 from .constraint_sets import ConstraintSet, Distance
 from .from_springs import constraints_from_system
+from .stiffness import iteration_corrected
 
 __all__ = ["XPBD", "PBD", "XPBD_WEIGHT"]
 
@@ -399,10 +407,19 @@ class XPBD:
 class PBD(XPBD):
     """Position-based dynamics (Müller et al. 2007): each set's ``stiffness`` in [0, 1], no multipliers.
 
-    Parameters as :class:`XPBD`; the constraint sets' ``compliance`` and
-    ``damping`` are not used, and :attr:`multipliers` stay zero. Its
-    effective stiffness depends on the iteration count and the time step
-    (lecture 8 measures it).
+    Parameters as :class:`XPBD`, and:
+
+    corrected : bool
+        Scale every stiffness ``k`` to ``1 - (1 - k)^(1/iterations)``
+        (:func:`particles.xpbd.stiffness.iteration_corrected`, the paper's
+        section 3.3), so that the iterations of a substep remove from one
+        constraint what one iteration of ``k`` would. The constraint sets keep
+        their ``k``; the solver projects with the corrected one.
+
+    The constraint sets' ``compliance`` and ``damping`` are not used, and
+    :attr:`multipliers` stay zero. Its effective stiffness depends on the
+    iteration count (much less with ``corrected``) and on the time step
+    (lecture 8 measures both).
 
     Examples
     --------
@@ -419,3 +436,21 @@ class PBD(XPBD):
     """
 
     formulation = "pbd"
+
+    def __init__(self, constraints, m, pinned=(), *, corrected=False, **options):
+        super().__init__(constraints, m, pinned, **options)
+        self.corrected = bool(corrected)
+        self._correct_batches()
+
+    def set_stiffness(self, stiffness):
+        """Set every constraint's PBD stiffness (in [0, 1]) and rebuild the batches; returns self."""
+        super().set_stiffness(stiffness)
+        self._correct_batches()
+        return self
+
+    def _correct_batches(self):
+        """With ``corrected``, project with ``1 - (1 - k)^(1/iterations)`` (the batches' copy of ``k``)."""
+        if self.corrected:
+            for batches in self._batches:  # a loop over the few sets
+                for b in batches:  # and over their colour groups
+                    b.k = iteration_corrected(b.k, self.iterations)

@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 from particles.course import check as check_module
-from particles.course.grading import driver as grading
+from particles.course.grading import session as grading
 from particles.course.check import CheckError, CheckResult, check
 from particles.course.results.records import SubmissionRecord, TestRecord
 

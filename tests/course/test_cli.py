@@ -130,7 +130,7 @@ def test_review_then_grade_with_the_rubric_then_change_it(tmp_path, capsys):
     assert main(grade + ["--rubric", str(bad)]) == 2
     err = capsys.readouterr().err
     assert f"{bad}, line 3: unknown student 'eve'" in err and "nothing was graded" in err
-    assert not (out / "records").exists()
+    assert not (out / "gradebook.csv").exists() and not list(out.glob("*/feedback.md"))
     _fill(rubric, {"ada": ("1.5", "Right; say why the error halves")})
     assert main(grade + ["--rubric", str(review)]) == 0
     rows = {r["student"]: r for r in csv.DictReader(open(out / "gradebook.csv"))}
@@ -153,3 +153,38 @@ def test_review_then_grade_with_the_rubric_then_change_it(tmp_path, capsys):
     bob = json.loads((out / "bob" / "results.json").read_text())
     assert bob["score"] == 0 and bob["extra_data"]["written"]["00_warmup"][0]["rubric"] == again["extra_data"]["rubric"]
     assert b"0 / 2" in bob_before and "0 / 2" in (out / "bob" / "feedback.html").read_text()
+
+
+def test_grade_says_which_written_answers_the_rubric_leaves_ungraded(tmp_path, capsys):
+    """Rubric rows without points are said by the command (they count 0 until graded)."""
+    subs = tmp_path / "subs"
+    (subs / "ada").mkdir(parents=True)
+    (subs / "ada" / "00_warmup.ipynb").write_text((ROOT / "solutions" / "00_warmup.ipynb").read_text())
+    assert main(["review", str(subs), "--out", str(tmp_path / "review"), "--root", str(ROOT)]) == 0
+    code = main(["grade", str(subs), "--out", str(tmp_path / "out"), "--root", str(ROOT), "--public",
+                 "--rubric", str(tmp_path / "review")])
+    err = capsys.readouterr().err
+    assert code == 0 and "rubric: 1 written answer(s) not graded yet, counted 0 until they are: ada 00_warmup " \
+                         "question 1" in err
+
+
+def test_the_record_verb_shows_runs_and_history_and_retires_a_result_saying_who_and_why(tmp_path, capsys):
+    """`particles record OUT` lists the runs and what is not graded yet; --history a student's results; --retire
+    makes the current one history, refusing without a reason."""
+    from particles.course.results.records import SubmissionRecord, TestRecord
+    from particles.course.term.database import TermRecord
+
+    term = TermRecord(tmp_path)
+    run = term.start_run("particles grade subs/ --out grades", {})
+    term.save(run, SubmissionRecord(student="ann", exercise="00_warmup", complete=True, grader_status=0,
+                                    tests=[TestRecord("t", "t", 3.0, passed=True)]), {})
+    term.finish_run(run)
+    term.close()
+    assert main(["record", str(tmp_path)]) == 0
+    assert "run 1: complete" in capsys.readouterr().out
+    assert main(["record", str(tmp_path), "--retire", "ann", "00_warmup"]) == 2
+    assert "--retire needs --why" in capsys.readouterr().err
+    assert main(["record", str(tmp_path), "--retire", "ann", "00_warmup", "--why", "copied", "--who", "prof"]) == 0
+    assert main(["record", str(tmp_path), "--history", "ann"]) == 0
+    assert "history: retired by prof: copied" in capsys.readouterr().out
+    assert main(["record", str(tmp_path / "nothing")]) == 2

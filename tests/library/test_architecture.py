@@ -25,7 +25,7 @@ KNOWN_PRIVATE_IMPORTS = set()
 
 # The modules that may draw (import Matplotlib at module level) and those that belong to the grader.
 DRAWING = {"particles.render", "particles.explore.figures"}
-GRADER_USERS = {"particles", "particles.cli"}  # the console command, and particles.check()
+GRADER_USERS = {"particles", "particles.cli"}  # particles.check(), and the console command (its verbs' modules)
 
 
 def _modules():
@@ -204,7 +204,8 @@ def test_physics_modules_do_not_import_matplotlib_when_loaded(name):
 
 def test_the_library_imports_nothing_of_the_grader():
     """Outside particles/course/, only the console command and particles.check() import the grader."""
-    users = {name for name in LIBRARY for target, names, _, _ in IMPORTS[name]
+    users = {name.removesuffix("." + name.split(".")[-1]) if name.startswith("particles.cli.") else name
+             for name in LIBRARY for target, names, _, _ in IMPORTS[name]
              if target.startswith("particles.course") or (target == "particles" and "course" in names)}
     assert users <= GRADER_USERS, sorted(users - GRADER_USERS)
 
@@ -607,3 +608,40 @@ def test_every_dotted_library_name_in_tests_corpora_and_notebooks_exists():
             if not _resolves(name):
                 missing.add(f"{path.relative_to(ROOT)}: {name}")
     assert sorted(missing) == []
+
+
+FUNCTION_LIMIT = 80  # lines of code of one function: docstrings, comments and blank lines not counted
+
+
+def _code_lines(path):
+    """The numbers of the lines of `path` that hold code (not a docstring, a comment or a blank line)."""
+    import io
+    import tokenize
+
+    source = path.read_text(encoding="utf-8")
+    docs = set()
+    for node in ast.walk(ast.parse(source)):
+        body = getattr(node, "body", None)
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and body \
+                and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) \
+                and isinstance(body[0].value.value, str):
+            docs.update(range(body[0].lineno, body[0].end_lineno + 1))
+    skipped = {tokenize.COMMENT, tokenize.NL, tokenize.NEWLINE, tokenize.INDENT, tokenize.DEDENT, tokenize.ENDMARKER}
+    return {line for token in tokenize.generate_tokens(io.StringIO(source).readline) if token.type not in skipped
+            for line in range(token.start[0], token.end[0] + 1) if line not in docs}
+
+
+def test_no_function_of_the_course_tools_or_the_command_line_is_over_80_lines_of_code():
+    """Every function of particles/course/ and particles/cli/ (nested functions counted in their parent) is at most
+    80 lines of code: a long one is a list of steps that want names of their own."""
+    long = []
+    for name, path in MODULES.items():
+        if not name.startswith(("particles.course", "particles.cli")):
+            continue
+        code = _code_lines(path)
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = sum(1 for line in range(node.lineno, node.end_lineno + 1) if line in code)
+                if n > FUNCTION_LIMIT:
+                    long.append(f"{name}.{node.name}: {n} lines")
+    assert long == []

@@ -5,6 +5,8 @@
   ``executed_lecture`` in ``conftest.py``, and the course-site test reuses it)
   and draws 8 to 15 figures (PNG images; the lectures still short of that are
   listed in ``FEW_FIGURES``, as strict xfails);
+* an appendix (``lectures/A1_*.ipynb``, ...) runs without any error too and draws
+  1 to 15 figures; it needs no animation (it extends a lecture that has one);
 * a released exercise is run too, with errors allowed: its solution cells
   raise ``NotImplementedError`` by design, so the test asserts that the first
   error of the notebook is a ``NotImplementedError`` (nothing breaks before
@@ -23,10 +25,12 @@ from nbclient import NotebookClient
 
 ROOT = Path(__file__).resolve().parents[2]
 LECTURES = sorted((ROOT / "lectures").glob("[0-9][0-9]_*.ipynb"))
+APPENDICES = sorted((ROOT / "lectures").glob("A[0-9]_*.ipynb"))
 MASTERS = sorted((ROOT / "solutions").glob("*.ipynb"))
 EXERCISES = sorted((ROOT / "exercises").glob("*.ipynb"))
 
 FIGURES = (8, 15)  # the figures a lecture draws, at least and at most
+APPENDIX_FIGURES = (1, 15)  # the figures an appendix draws
 # lectures that draw fewer figures than that so far: strict xfails, to be removed when fixed
 FEW_FIGURES = set()
 
@@ -63,6 +67,15 @@ def test_lecture_runs_clean_with_an_animation(path, executed_lecture):
     nb = executed_lecture(path)
     assert _errors(nb) == []
     assert _players(nb), f"{path.name}: no embedded HTML/JS animation player"
+
+
+@pytest.mark.parametrize("path", APPENDICES, ids=[p.name for p in APPENDICES])
+def test_appendix_runs_clean_with_figures(path, executed_lecture):
+    """An appendix runs top to bottom in a fresh kernel without errors and shows 1 to 15 figures."""
+    nb = executed_lecture(path)
+    assert _errors(nb) == []
+    low, high = APPENDIX_FIGURES
+    assert low <= _figures(nb) <= high, f"{path.name}: {_figures(nb)} figures, expected {low} to {high}"
 
 
 def _figures(nb):

@@ -1,6 +1,7 @@
 """The notebook rhythm of CFDPython (STYLE.md, point 10; DESIGN.md, "Notebooks"), read from files.
 
-For every lecture (``lectures/NN_*.ipynb``) and every master (``solutions/*.ipynb``):
+For every lecture (``lectures/NN_*.ipynb``), appendix (``lectures/A1_*.ipynb``, ...) and master
+(``solutions/*.ipynb``):
 
 * **headers**: each section header opens its own markdown cell, so that the
   comment on a result and the next section are separate cells (the solution
@@ -29,6 +30,7 @@ from particles.course.release.notebooks import BEGIN, END
 
 ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOKS = (sorted((ROOT / "lectures").glob("[0-9][0-9]_*.ipynb"))
+             + sorted((ROOT / "lectures").glob("A[0-9]_*.ipynb"))
              + sorted((ROOT / "solutions").glob("*.ipynb")))
 NAMES = [p.relative_to(ROOT).as_posix() for p in NOTEBOOKS]
 

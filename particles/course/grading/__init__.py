@@ -2,8 +2,24 @@
 
 Modules:
 
-* :mod:`~particles.course.grading.driver`: ``particles grade``: batches of pytest sessions, records,
-  reports;
+* :mod:`~particles.course.grading.driver`: ``particles grade``: the grading run, its stages strung
+  together;
+* :mod:`~particles.course.grading.options`: the options of a run, one typed object checked once;
+* :mod:`~particles.course.grading.plan`: the batches of a run and each notebook's seed;
+* :mod:`~particles.course.grading.run`: where batches are graded (a runner: this machine's cores), a
+  lost batch retried;
+* :mod:`~particles.course.grading.cluster`: the runner on a Dask cluster (``--scheduler``): an embedded
+  ``LocalCluster`` or a running scheduler, each result delivered once;
+* :mod:`~particles.course.grading.cluster_worker`: a cluster's grading worker: its checks before it joins,
+  and the task it grades;
+* :mod:`~particles.course.grading.cluster_tasks`: a cluster's tasks and results as plain data, checked on
+  both sides;
+* :mod:`~particles.course.grading.session`: one pytest session grading a batch; its signed records
+  read back;
+* :mod:`~particles.course.grading.record`: each result decided, saved (a recorder: the records
+  folder) and reported as it arrives;
+* :mod:`~particles.course.grading.report`: the gradebook, feedback and Gradescope file at the end of
+  a run;
 * :mod:`~particles.course.grading.plugin`: the pytest plugin: points, hidden tests, seeds, records
   of a session;
 * :mod:`~particles.course.grading.discovery`: which notebooks are graded, as which student and
@@ -19,7 +35,8 @@ Modules:
 * :mod:`~particles.course.grading.figures`: figures in the feedback: the student's curve beside the
   reference's.
 * :mod:`~particles.course.grading.deadlines`: the course file (``course.toml``): deadlines, the late
-  policy, extensions; submission times; the late penalty of a record;
+  policy, extensions (their names checked); the late penalty of a record;
+* :mod:`~particles.course.grading.times`: when each notebook was submitted, never guessed;
 * :mod:`~particles.course.grading.versions`: which version of the tests graded a record (a digest of
   the exercise's tests and the library).
 """

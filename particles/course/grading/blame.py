@@ -178,11 +178,41 @@ def _loop_names(function):
     return names
 
 
+def _is_mask(node, masks):
+    """Whether an expression is a boolean mask: a comparison, a mask name, or ``~``, ``&``, ``|``, ``^`` of masks."""
+    if isinstance(node, ast.Compare):
+        return True
+    if isinstance(node, ast.Name):
+        return node.id in masks
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.Invert, ast.Not)):
+        return _is_mask(node.operand, masks)
+    if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.BitAnd, ast.BitOr, ast.BitXor)):
+        return _is_mask(node.left, masks) and _is_mask(node.right, masks)
+    return False
+
+
+def _mask_names(function):
+    """Names a function binds once, to a boolean mask (``inside = H < 0``): an index of them never repeats."""
+    assigned, masks = {}, set()
+    for node in ast.walk(function):
+        if isinstance(node, ast.Assign):
+            for target in node.targets:
+                if isinstance(target, ast.Name):
+                    assigned.setdefault(target.id, []).append(node.value)
+    for _ in range(3):  # masks made of masks, a few levels deep
+        masks = {name for name, values in assigned.items() if all(_is_mask(v, masks) for v in values)}
+    return masks
+
+
 def _array_index(index, loops):
-    """Whether a subscript's index may be an array of indices: a name no loop binds, or an expression of one."""
+    """Whether a subscript's index may be an array of indices: a name no loop binds, or an expression of one.
+
+    `loops` holds the names that are safe: scalars a loop binds, and boolean masks (``x[inside] -= ...``
+    changes each selected row once).
+    """
     if isinstance(index, ast.Tuple):
         return any(_array_index(e, loops) for e in index.elts)
-    if isinstance(index, (ast.Slice, ast.Constant)):
+    if isinstance(index, (ast.Slice, ast.Constant)) or _is_mask(index, loops):
         return False
     names = [n.id for n in ast.walk(index) if isinstance(n, ast.Name)]
     return bool(names) and not all(n in loops for n in names)
@@ -194,12 +224,12 @@ def scatter_hazards(code, name):
     NumPy's ``x[i] += c`` reads ``x[i]`` once and writes it once: where ``i`` repeats, only one of the additions
     is kept (``np.add.at(x, i, c)`` or ``np.bincount`` keep them all). An index a ``for`` loop binds is a
     scalar and safe, and a statement inside a loop is left alone (a loop over colours, Gauss-Seidel: sets
-    of indices that share no particle, on purpose).
+    of indices that share no particle, on purpose). So is a boolean mask (``x[inside] -= H[inside] * n``).
     """
     s = code._definition(name)
     if s is None or not isinstance(s.node, (ast.FunctionDef, ast.AsyncFunctionDef)):
         return []
-    loops, found = _loop_names(s.node), []
+    loops, found = _loop_names(s.node) | _mask_names(s.node), []
     in_loops = {id(n) for loop in ast.walk(s.node) if isinstance(loop, (ast.For, ast.While))
                 for stmt in loop.body for n in ast.walk(stmt)}
     for node in ast.walk(s.node):

@@ -3,6 +3,8 @@
 The course file is TOML, ``course.toml`` at the course root or given with
 ``particles grade --course FILE``::
 
+    roster = "roster.csv"    # who is in the course (see particles.course.term.roster); optional
+
     # the late policy of every exercise (each may override it)
     [late]
     penalty_per_day = 0.10   # fraction of the exercise's points taken off per started day late
@@ -13,7 +15,7 @@ The course file is TOML, ``course.toml`` at the course root or given with
     deadline = 2026-10-01T23:59:00+01:00   # ISO 8601 with a time zone (a TOML date-time or a string)
 
     [exercises.01_integrator_order]
-    deadline = "2026-10-15T23:59:00+01:00"
+    deadline = "2026-10-29T23:59 Europe/Berlin"  # a local time and a named zone: CET or CEST, as that day has it
     penalty_per_day = 0.2                  # this exercise's own policy
 
     [extensions.alice]                     # per student: a new deadline, or extra days
@@ -26,32 +28,65 @@ The penalty is a fraction of the exercise's points (the record's
 [0, 1]. The grace period only forgives: a submission after the grace period counts its days late
 from the deadline itself. An exercise the file does not name has no deadline (its records'
 ``late`` is None). Every key is checked: an unknown exercise or key, a deadline without a time
-zone, a negative penalty, a cap outside [0, 1] are errors naming the key.
+zone, a negative penalty, a cap outside [0, 1] are errors naming the key, all of a file's errors
+at once.
 
-The time of a submission is, in this order: Gradescope's ``submission_metadata.json``
-(``created_at``; ``particles grade --metadata FILE``, which the bundle's ``run_autograder``
-passes), a times file (``--times FILE``: a CSV ``student,exercise,submitted`` as LMS exports
-give, ``submitted`` in ISO 8601 with a zone), else the notebook file's modification time. The
-record's ``late`` says which (``source``).
+A time (a deadline, an extension's new deadline, a submission time) is a TOML date-time with an
+offset (``2026-10-01T23:59:00+01:00``, ``Z`` for UTC), or a string: ISO 8601 with an offset, or a
+local date and time followed by a named zone of the IANA database (``"2026-10-29T23:59
+Europe/Berlin"``, also ``"2026-10-29T23:59[Europe/Berlin]"``), whose offset is the one that zone
+has on that day, daylight saving included (Python's ``zoneinfo``: the system's zone database, or
+the ``tzdata`` package where the system has none). A local time that does not exist in the zone
+(the hour skipped when clocks go forward) or happens twice (when they go back) is an error: write
+it with its offset.
+
+The time of a submission is never guessed (:mod:`particles.course.grading.times` says where it comes from).
+
+Every name is checked: an ``[extensions.NAME]`` or a times file's ``student`` that is no student of the course
+(:mod:`particles.course.term.identity`: the roster's students and aliases, else the students the course's
+record and the run know) stops the run before anything is graded, naming the file and the key or line. The
+course file may name the roster: ``roster = "roster.csv"`` (relative to the course file).
 """
 
-import csv
-import json
 import math
-import os
+import re
 import tomllib
 from dataclasses import dataclass, field
 from datetime import date, datetime, time, timedelta, timezone
 from pathlib import Path
+from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
-__all__ = ["LatePolicy", "Course", "load_course", "find_course", "decide", "apply_late", "SubmissionTimes",
-           "read_times", "read_gradescope_metadata", "parse_time", "COURSE_FILE"]
+from .discovery import Unit
+
+__all__ = ["LatePolicy", "Course", "load_course", "find_course", "decide", "apply_late", "LateWork", "parse_time",
+           "resolve_extensions", "shown_time", "COURSE_FILE"]
 
 COURSE_FILE = "course.toml"
 """The course file's name at the course root."""
 
 _POLICY_KEYS = ("penalty_per_day", "cap", "grace_minutes")
 _DAY = timedelta(days=1)
+_NAMED = re.compile(r"^(?P<when>\d{4}-\d\d-\d\d[T ]\d\d:\d\d(?::\d\d(?:\.\d+)?)?)"
+                    r"(?:\s+(?P<zone>[A-Za-z][\w+-]*(?:/[\w+-]+)*)|\[(?P<bracket>[^\]]+)\])$")
+
+
+def _in_zone(when, name, key):
+    """A local date and time `when` (ISO 8601, no offset) in the IANA zone `name`, checked to exist once."""
+    try:
+        zone = ZoneInfo(name)
+    except (ZoneInfoNotFoundError, ValueError):
+        raise ValueError(f"{key}: unknown time zone {name!r}; expected a name of the IANA time zone database "
+                         "such as Europe/Berlin or America/New_York, or an offset (+01:00)") from None
+    local = datetime.fromisoformat(when)
+    first, second = local.replace(tzinfo=zone, fold=0), local.replace(tzinfo=zone, fold=1)
+    exists = [a for a in (first, second) if a.astimezone(timezone.utc).astimezone(zone).replace(tzinfo=None) == local]
+    if not exists:
+        raise ValueError(f"{key}: {when} does not exist in {name} (the clocks go forward over it); write the "
+                         "time with its offset")
+    if first.utcoffset() != second.utcoffset():
+        raise ValueError(f"{key}: {when} happens twice in {name} (the clocks go back over it); write it with its "
+                         f"offset ({first.isoformat()} or {second.isoformat()})")
+    return first
 
 
 def parse_time(value, key):
@@ -60,20 +95,35 @@ def parse_time(value, key):
     Parameters
     ----------
     value : datetime or str
+        A date-time with an offset, or a string: ISO 8601 with an offset, or a local date and time and a named
+        zone (``"2026-10-29T23:59 Europe/Berlin"`` or ``"2026-10-29T23:59[Europe/Berlin]"``, see the module's
+        notes).
     key : str
         Where the value was given, for the error (``exercises.00_warmup.deadline``).
 
     Raises
     ------
     ValueError
-        When `value` is not a date-time, or has no time zone (naming `key`).
+        When `value` is not a date-time, has no time zone, names an unknown zone, or a local time that does not
+        exist or happens twice in its zone (naming `key`).
+
+    Examples
+    --------
+    >>> parse_time("2026-07-01T23:59 Europe/Berlin", "deadline").isoformat()
+    '2026-07-01T23:59:00+02:00'
+    >>> parse_time("2026-11-01T23:59[Europe/Berlin]", "deadline").isoformat()
+    '2026-11-01T23:59:00+01:00'
     """
     if isinstance(value, str):
+        named = _NAMED.match(value.strip())
+        if named:
+            return _in_zone(named.group("when"), named.group("zone") or named.group("bracket").strip(), key)
         try:
             value = datetime.fromisoformat(value.strip())
         except ValueError:
             raise ValueError(f"{key}: {value!r} is not an ISO 8601 date-time "
-                             "(expected e.g. 2026-10-01T23:59:00+01:00)") from None
+                             "(expected e.g. 2026-10-01T23:59:00+01:00 or \"2026-10-01T23:59 Europe/Berlin\")") \
+                from None
     if isinstance(value, date) and not isinstance(value, datetime) or isinstance(value, time):
         raise ValueError(f"{key}: {value.isoformat()} is not a date and a time with a time zone "
                          "(expected e.g. 2026-10-01T23:59:00+01:00)")
@@ -81,7 +131,7 @@ def parse_time(value, key):
         raise ValueError(f"{key}: expected a date-time with a time zone, got {type(value).__name__} {value!r}")
     if value.tzinfo is None or value.utcoffset() is None:
         raise ValueError(f"{key}: {value.isoformat()} has no time zone; write it with one "
-                         f"(e.g. {value.isoformat()}+01:00, or Z for UTC)")
+                         f"(e.g. {value.isoformat()}+01:00, Z for UTC, or \"{value.isoformat()} Europe/Berlin\")")
     return value
 
 
@@ -108,17 +158,21 @@ class LatePolicy:
         """The policy of a TOML table (keys of :data:`_POLICY_KEYS`), defaults from `base`."""
         base = base or cls()
         values = {name: getattr(base, name) for name in _POLICY_KEYS}
+        problems = []
         for name in _POLICY_KEYS:
             if name not in table:
                 continue
             value = table[name]
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise ValueError(f"{key}.{name}: expected a number, got {value!r}")
-            if value < 0:
-                raise ValueError(f"{key}.{name}: must be >= 0, got {value!r}")
-            if name == "cap" and value > 1:
-                raise ValueError(f"{key}.cap: a fraction of the exercise's points, in [0, 1], got {value!r}")
-            values[name] = float(value)
+                problems.append(f"{key}.{name}: expected a number, got {value!r}")
+            elif value < 0:
+                problems.append(f"{key}.{name}: must be >= 0, got {value!r}")
+            elif name == "cap" and value > 1:
+                problems.append(f"{key}.cap: a fraction of the exercise's points, in [0, 1], got {value!r}")
+            else:
+                values[name] = float(value)
+        if problems:
+            raise ValueError("\n".join(problems))
         return cls(**values)
 
 
@@ -136,12 +190,15 @@ class Course:
         student -> {exercise -> aware datetime (a new deadline) or float (extra days)}.
     path : str
         The file read ("" when made in code).
+    roster : Path or None
+        The roster the course file names (``roster = "roster.csv"``, relative to the course file).
     """
 
     deadlines: dict = field(default_factory=dict)
     policies: dict = field(default_factory=dict)
     extensions: dict = field(default_factory=dict)
     path: str = ""
+    roster: Path = None
 
     def deadline_of(self, student, exercise, aliases=()):
         """(deadline, why) of `student` for `exercise`, after extensions; (None, "") when none applies.
@@ -189,7 +246,10 @@ def load_course(path, exercises):
     try:
         return _course(data, list(exercises), str(path))
     except ValueError as error:
-        raise ValueError(f"{path}: {error}") from None
+        problems = str(error).splitlines()
+        if len(problems) == 1:
+            raise ValueError(f"{path}: {error}") from None
+        raise ValueError(f"{path}: {len(problems)} problems:\n  " + "\n  ".join(problems)) from None
 
 
 def _table(data, key):
@@ -200,52 +260,74 @@ def _table(data, key):
 
 
 def _course(data, exercises, path=""):
-    unknown = sorted(set(data) - {"late", "exercises", "extensions"})
-    if unknown:
-        raise ValueError(f"unknown key {unknown[0]!r}; expected late, exercises or extensions")
-    known = ", ".join(exercises)
+    """The :class:`Course` of a course file's TOML data; every problem at once (a ValueError, one per line)."""
+    problems = []
 
-    def check_exercise(name, key):
-        if name not in exercises:
-            raise ValueError(f"{key}: unknown exercise {name!r}; expected one of {known}")
+    def attempt(check, *args, default=None):
+        try:
+            return check(*args)
+        except ValueError as error:
+            problems.extend(str(error).splitlines())
+            return default
 
-    late = _table(data, "late")
-    extra = sorted(set(late) - set(_POLICY_KEYS))
-    if extra:
-        raise ValueError(f"late.{extra[0]}: unknown key; expected {', '.join(_POLICY_KEYS)}")
-    base = LatePolicy.from_table(late, "late")
+    problems += [f"unknown key {k!r}; expected roster, late, exercises or extensions"
+                 for k in sorted(set(data) - {"roster", "late", "exercises", "extensions"})]
+    late = attempt(_table, data, "late", default={})
+    problems += [f"late.{k}: unknown key; expected {', '.join(_POLICY_KEYS)}"
+                 for k in sorted(set(late) - set(_POLICY_KEYS))]
+    base = attempt(LatePolicy.from_table, late, "late", default=LatePolicy())
     course = Course(path=path)
-    for name, table in _table(data, "exercises").items():
+    if "roster" in data:
+        if not isinstance(data["roster"], str) or not data["roster"].strip():
+            problems.append(f"roster: expected the roster file's path (a string), got {data['roster']!r}")
+        else:
+            course.roster = Path(path).parent / data["roster"] if path else Path(data["roster"])
+    for name, table in attempt(_table, data, "exercises", default={}).items():
         key = f"exercises.{name}"
-        check_exercise(name, key)
+        if name not in exercises:
+            problems.append(f"{key}: unknown exercise {name!r}; expected one of {', '.join(exercises)}")
+            continue
         if not isinstance(table, dict):
-            raise ValueError(f"{key}: expected a table ([{key}]) with a deadline, got {table!r}")
-        extra = sorted(set(table) - {"deadline", *_POLICY_KEYS})
-        if extra:
-            raise ValueError(f"{key}.{extra[0]}: unknown key; expected deadline, {', '.join(_POLICY_KEYS)}")
+            problems.append(f"{key}: expected a table ([{key}]) with a deadline, got {table!r}")
+            continue
+        problems += [f"{key}.{k}: unknown key; expected deadline, {', '.join(_POLICY_KEYS)}"
+                     for k in sorted(set(table) - {"deadline", *_POLICY_KEYS})]
         if "deadline" not in table:
-            raise ValueError(f"{key}: no deadline (add deadline = 2026-10-01T23:59:00+01:00, or remove the table)")
-        course.deadlines[name] = parse_time(table["deadline"], f"{key}.deadline")
-        course.policies[name] = LatePolicy.from_table(table, key, base)
-    for student, table in _table(data, "extensions").items():
+            problems.append(f"{key}: no deadline (add deadline = 2026-10-01T23:59:00+01:00, or remove the table)")
+            continue
+        deadline = attempt(parse_time, table["deadline"], f"{key}.deadline")
+        policy = attempt(LatePolicy.from_table, table, key, base)
+        if deadline is not None and policy is not None:
+            course.deadlines[name], course.policies[name] = deadline, policy
+    for student, table in attempt(_table, data, "extensions", default={}).items():
         key = f"extensions.{student}"
         if not isinstance(table, dict):
-            raise ValueError(f"{key}: expected a table of exercise = new deadline or extra days, got {table!r}")
+            problems.append(f"{key}: expected a table of exercise = new deadline or extra days, got {table!r}")
+            continue
         course.extensions[student] = {}
         for name, value in table.items():
-            check_exercise(name, f"{key}.{name}")
-            if name not in course.deadlines:
-                raise ValueError(f"{key}.{name}: an extension of an exercise without a deadline "
-                                 f"(add [exercises.{name}] with its deadline)")
-            if isinstance(value, bool) or not isinstance(value, (int, float, str, datetime, date, time)):
-                raise ValueError(f"{key}.{name}: expected a new deadline or a number of extra days, got {value!r}")
-            if isinstance(value, (int, float)):
-                if not math.isfinite(value) or value < 0:
-                    raise ValueError(f"{key}.{name}: extra days must be a number >= 0, got {value!r}")
-                course.extensions[student][name] = float(value)
-            else:
-                course.extensions[student][name] = parse_time(value, f"{key}.{name}")
+            given = attempt(_extension, name, value, f"{key}.{name}", exercises, course)
+            if given is not None:
+                course.extensions[student][name] = given
+    if problems:
+        raise ValueError("\n".join(problems))
     return course
+
+
+def _extension(name, value, key, exercises, course):
+    """One extension of a course file: a new deadline (aware datetime) or extra days (float), checked."""
+    if name not in exercises:
+        raise ValueError(f"{key}: unknown exercise {name!r}; expected one of {', '.join(exercises)}")
+    if name not in course.deadlines:
+        raise ValueError(f"{key}: an extension of an exercise without a deadline "
+                         f"(add [exercises.{name}] with its deadline)")
+    if isinstance(value, bool) or not isinstance(value, (int, float, str, datetime, date, time)):
+        raise ValueError(f"{key}: expected a new deadline or a number of extra days, got {value!r}")
+    if isinstance(value, (int, float)):
+        if not math.isfinite(value) or value < 0:
+            raise ValueError(f"{key}: extra days must be a number >= 0, got {value!r}")
+        return float(value)
+    return parse_time(value, key)
 
 
 def find_course(root, exercises, path=None):
@@ -260,7 +342,7 @@ def _fmt(x):
     return f"{x:g}"
 
 
-def _when(moment):
+def shown_time(moment):
     """``2026-10-01 23:59 +01:00`` (seconds only when there are some)."""
     text = moment.strftime("%Y-%m-%d %H:%M" + (":%S" if moment.second else ""))
     offset = moment.strftime("%z")
@@ -314,11 +396,11 @@ def decide(submitted, deadline, policy, total_max, why="", source=""):
     """
     submitted, deadline = parse_time(submitted, "submitted"), parse_time(deadline, "deadline")
     shown = submitted.astimezone(deadline.tzinfo)
-    where = f"the deadline {_when(deadline)}" + (f" ({why})" if why else "")
+    where = f"the deadline {shown_time(deadline)}" + (f" ({why})" if why else "")
     late = shown - deadline
     days, fraction = 0, 0.0
     if late <= timedelta(0):
-        reason = f"submitted {_when(shown)}, before {where}: no penalty"
+        reason = f"submitted {shown_time(shown)}, before {where}: no penalty"
     elif late <= timedelta(minutes=policy.grace_minutes):
         reason = (f"submitted {_duration(late)} after {where}, within the grace period of "
                   f"{_fmt(policy.grace_minutes)} minutes: no penalty")
@@ -361,98 +443,49 @@ def apply_late(record, course, submitted, source="", aliases=()):
     return record
 
 
-def read_gradescope_metadata(path):
-    """(created_at, aliases) of Gradescope's ``submission_metadata.json``.
-
-    Gradescope writes the file to ``/autograder/submission_metadata.json``
-    (https://gradescope-autograders.readthedocs.io/en/latest/submission_metadata/): ``created_at``
-    is the submission's time (ISO 8601 with its zone), ``users`` the submitters (``email``, ``id``,
-    ``name``, sometimes ``sid``), whose e-mails and ids an extension may name.
+def resolve_extensions(course, identity, where=""):
+    """The course with its extensions keyed by the grader's names of their students.
 
     Raises
     ------
     ValueError
-        When the file cannot be read, is not JSON, or has no valid ``created_at``.
+        Naming every ``[extensions.NAME]`` that is no student of `identity` (nothing is graded).
     """
-    path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError) as error:
-        raise ValueError(f"cannot read Gradescope's submission metadata {path}: {error}") from None
-    if not isinstance(data, dict) or "created_at" not in data:
-        raise ValueError(f"{path}: Gradescope's submission metadata has no created_at")
-    submitted = parse_time(data["created_at"], f"{path}: created_at")
-    aliases = []
-    for user in data.get("users") or []:
-        if isinstance(user, dict):
-            aliases += [str(user[k]) for k in ("email", "sid", "id") if user.get(k) not in (None, "")]
-    return submitted, aliases
+    if course is None or not course.extensions:
+        return course
+    unknown = [name for name in course.extensions if identity.find(name) is None]
+    if unknown:
+        raise ValueError(f"{course.path or where}: " + "; ".join(f"[extensions.{n}]: {n!r} is no student of "
+                         f"{identity.describe()}" for n in unknown) + "; correct the name (or add it to the roster's "
+                         "aliases); nothing was graded")
+    extensions = {}
+    for name, table in course.extensions.items():
+        extensions.setdefault(identity.find(name).name, {}).update(table)
+    return Course(course.deadlines, course.policies, extensions, course.path, course.roster)
 
 
-def read_times(path):
-    """The times file: a CSV with the columns ``student``, ``exercise``, ``submitted`` (others ignored).
-
-    Returns
-    -------
-    dict
-        (student, exercise) -> aware datetime. An empty ``exercise`` cell stands for every exercise
-        (key ``(student, "")``).
-
-    Raises
-    ------
-    ValueError
-        When the file cannot be read, lacks a column, or a row's time is not ISO 8601 with a zone
-        (naming the row), or a student and exercise are given twice.
-    """
-    path = Path(path)
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as handle:
-            rows = list(csv.DictReader(handle))
-            columns = rows and list(rows[0]) or []
-    except (OSError, UnicodeDecodeError, csv.Error) as error:
-        raise ValueError(f"cannot read the times file {path}: {error}") from None
-    missing = [c for c in ("student", "exercise", "submitted") if c not in columns]
-    if rows and missing:
-        raise ValueError(f"{path}: no column {', '.join(missing)}; expected a header student,exercise,submitted")
-    times = {}
-    for line, row in enumerate(rows, start=2):
-        key = ((row["student"] or "").strip(), (row["exercise"] or "").strip())
-        if not key[0]:
-            raise ValueError(f"{path}, line {line}: no student")
-        if key in times:
-            raise ValueError(f"{path}, line {line}: {key[0]} {key[1] or '(every exercise)'} is given twice")
-        times[key] = parse_time(row["submitted"] or "", f"{path}, line {line}, submitted")
-    return times
-
-
-class SubmissionTimes:
-    """When each notebook was submitted: Gradescope's metadata, else a times file, else the file's time.
+class LateWork:
+    """The late-work decision of each record of a run: the deadline from the course, the time from `times`.
 
     Parameters
     ----------
-    metadata : path, optional
-        Gradescope's ``submission_metadata.json`` (every notebook graded is of that one submission).
-    times : path, optional
-        A times file (:func:`read_times`).
+    course : Course or None
+        The course file's deadlines (:func:`find_course`).
+    times : SubmissionTimes
+    units : iterable of Unit
+        The run's notebooks; a record is decided with the time of its own. A record of another notebook (one
+        of the term's other current results) is decided with the time the course's record kept for it, and
+        keeps its decision when no time is known.
     """
 
-    def __init__(self, metadata=None, times=None):
-        self.metadata = read_gradescope_metadata(metadata) if metadata is not None else None
-        self.times = read_times(times) if times is not None else {}
+    def __init__(self, course, times, units):
+        self.course, self.times = course, times
+        self.units = {(unit.student, unit.exercise): unit for unit in units}
 
-    def aliases(self):
-        """Other names of the submitter (Gradescope's e-mails and ids) an extension may use."""
-        return tuple(self.metadata[1]) if self.metadata else ()
-
-    def of(self, unit):
-        """(submitted, source) of a :class:`~particles.course.grading.discovery.Unit`; (None, "") if unknown."""
-        if self.metadata is not None:
-            return self.metadata[0], "Gradescope's submission metadata"
-        for key in ((unit.student, unit.exercise), (unit.student, "")):
-            if key in self.times:
-                return self.times[key], "the times file"
-        try:
-            mtime = os.stat(unit.notebook).st_mtime
-        except OSError:
-            return None, ""
-        return datetime.fromtimestamp(mtime, tz=timezone.utc), "the notebook file's modification time"
+    def __call__(self, record):
+        """Set ``record.late`` (see :func:`apply_late`) and return `record`."""
+        unit = self.units.get((record.student, record.exercise))
+        when, source = self.times.of(unit or Unit(record.student, record.exercise, Path(record.notebook or "")))
+        if unit is None and when is None:
+            return record
+        return apply_late(record, self.course, when, source, self.times.aliases())

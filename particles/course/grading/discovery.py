@@ -6,12 +6,15 @@ Layouts read (:func:`find_submissions`):
   file name without ``.ipynb``;
 * a folder: notebooks directly inside it are graded the same way; notebooks
   in sub-folders belong to the student named by the first sub-folder (the
-  layout of an export with one folder per student). Canvas's file names
-  ``login_[late_]userid_submissionid_name.ipynb`` belong to ``login``;
-  Moodle's folders ``Full Name_12345_assignsubmission_file_`` to
-  ``Full_Name_12345``; Gradescope's ``submission_NNN/`` folders to the first
-  submitter's e-mail address found for them in ``submission_metadata.yml``
-  beside them;
+  layout of an export with one folder per student);
+* Canvas's file names ``login_[LATE_]userid_attachmentid_name[-N].ipynb`` belong to Canvas user ``userid``
+  (login ``login``): two students with one login are two students. Of one user's files for one exercise, the
+  latest upload is graded (the largest attachment id, then Canvas's ``-N`` copy number) and the report says
+  which; ``LATE_`` is kept as Canvas's flag, checked against the submission time;
+* Moodle's folders ``Full Name_12345_assignsubmission_file_`` belong to ``Full_Name_12345``;
+* Gradescope's ``submission_NNN/`` folders belong to every submitter that ``submission_metadata.yml`` beside
+  them lists (a group submission is graded once per submitter), each known by their e-mail and SID, and
+  were submitted at its ``created_at`` (read with a YAML library: Ruby's symbol keys, its timestamps);
 * a ``.zip`` (an LMS export, or one student's upload) is opened safely into a
   private folder (:func:`particles.course.grading.intake.extract_zip`: a zip
   with links, paths out of it or the shape of a bomb is refused, saying why)
@@ -27,15 +30,16 @@ The exercise of a notebook is read from its metadata (written by
 ``particles release``), else from its file name (``..._00_warmup...``), else
 from ``--exercise``, which also overrides both.
 
-Students are compared case-insensitively, after Unicode normalization (``Alice/`` and ``alice.ipynb`` are
-one student, spelled as the first of the spellings in sorted order). A student
-with several notebooks of one exercise in one place (their own folder, or one
-Canvas submission) gets one graded: the one named exactly ``NN_topic.ipynb``,
-else the newest; the others are reported. Notebooks of one student and
-exercise from *different* places (a file and a folder, ``Alice/`` and
-``alice/``, two folders given) are a conflict: none of them is graded, the
-student gets a :class:`Unit` rejected with a reason naming all of them, and the
-problem is reported.
+Who a submission belongs to is decided by the course's
+:class:`~particles.course.term.identity.Identity` (the roster and the students' aliases, else the students the
+course's record knows), every name matched case- and Unicode-insensitively: ``Alice/`` and ``alice.ipynb`` are
+one student, and so are Canvas's ``alicesmith`` and Gradescope's ``alice@uni.edu`` when the roster says so. A
+submission whose names are no roster student's is graded under its own name and reported. A student with
+several notebooks of one exercise in one place (their own folder, or one Canvas user's files) gets one graded:
+Canvas's latest upload, else the one named exactly ``NN_topic.ipynb``, else the newest; the others are
+reported. Notebooks of one student and exercise from *different* places (a file and a folder, ``Alice/`` and
+``alice/``, two folders given) are a conflict: none of them is graded, the student gets a :class:`Unit`
+rejected with a reason naming all of them, and the problem is reported.
 
 A notebook that is not one the grader reads (:func:`particles.course.grading.intake.read_notebook`:
 not UTF-8 JSON, not nbformat 4, duplicate cell ids, too large...) is a
@@ -43,21 +47,27 @@ not UTF-8 JSON, not nbformat 4, duplicate cell ids, too large...) is a
 records 0 for it, saying why, and grades the others.
 """
 
+import dataclasses
 import hashlib
 import json
 import os
 import re
-import unicodedata
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from datetime import datetime
 from pathlib import Path
 
+import yaml
+
 from ..release.answers import count_answers
+from ..term.identity import Identity, filing_name, name_key
 from .intake import DEFAULT_LIMITS, NotebookRejected, ZipRefused, extract_zip, read_notebook, skipped_name
 
-__all__ = ["Unit", "find_submissions", "written_answers", "released_exercise", "notebook_digest", "student_key"]
+__all__ = ["Unit", "find_submissions", "written_answers", "released_exercise", "notebook_digest", "student_key",
+           "gradescope_submissions"]
 
-CANVAS = re.compile(r"^(?P<login>[^_]+)_(?:late_|LATE_)?(?P<user>\d+)_(?P<submission>\d+)_(?P<name>.+)$")
-"""Canvas's names of the files of a submissions download."""
+CANVAS = re.compile(r"^(?P<login>[^_]+)_(?P<late>late_|LATE_)?(?P<user>\d+)_(?P<submission>\d+)_(?P<name>.+?)"
+                    r"(?:-(?P<copy>\d+))?(?P<suffix>\.ipynb)?$", re.IGNORECASE)
+"""Canvas's names of the files of a submissions download (``-N``: Canvas's copy number of a re-upload)."""
 
 MOODLE = re.compile(r"^(?P<name>.+_\d+)_assign(?:submission|feedback)_[a-z]+_?$")
 """Moodle's names of the folders of a submissions download."""
@@ -77,6 +87,22 @@ class Unit:
     origin : str
         Where it came from as the instructor named it (``export.zip:alice/00_warmup.ipynb``; "" when it is
         `notebook` itself).
+    aliases : tuple of (kind, value)
+        The names the submission gave its student (Canvas's user id and login, Gradescope's e-mail and SID).
+    submitted : datetime, optional
+        When it was submitted, when the LMS's download says so (Gradescope's ``created_at``).
+    time_source : str
+        Where `submitted` came from.
+    late_flag : bool
+        Canvas marked it late (``LATE_`` in its file name).
+    on_roster : bool
+        Its student is one the course knows (False: a name no roster student has).
+    place : tuple
+        The place it came from (a folder, a Canvas user's files in one download, a Gradescope submission):
+        one student's notebooks of one exercise from two places are a conflict.
+    handed_in : str
+        The notebook as the student handed it in: its path inside the zip or folder given (``alice/00_warmup.ipynb``),
+        or its name; what the student reads of it, with none of the instructor's folders.
     """
 
     student: str
@@ -84,11 +110,25 @@ class Unit:
     notebook: Path
     rejected: str = ""
     origin: str = ""
+    aliases: tuple = ()
+    submitted: datetime = None
+    time_source: str = ""
+    late_flag: bool = False
+    on_roster: bool = True
+    place: tuple = ()
+    handed_in: str = ""
+    _digest: str = field(default=None, init=False, repr=False, compare=False)
 
     @property
     def where(self):
         """Where the notebook came from, in words."""
         return self.origin or str(self.notebook)
+
+    def digest(self):
+        """The notebook's SHA-256 (:func:`notebook_digest`), read once."""
+        if self._digest is None:
+            self._digest = notebook_digest(self.notebook)
+        return self._digest
 
 
 def _exercise_of(notebook, content, exercises, override=None):
@@ -105,55 +145,69 @@ def _exercise_of(notebook, content, exercises, override=None):
     return None
 
 
-def _student_name(text):
-    text = unicodedata.normalize("NFC", text)  # macOS writes names decomposed (NFD), Windows composed
-    return re.sub(r"[^\w.@+-]+", "_", text).strip("_") or "submission"
-
-
 def student_key(text):
-    """The key two names of one student compare equal by: the grader's name for `text`, case-folded.
+    """The key two names of one student compare equal by (:func:`particles.course.term.identity.name_key`)."""
+    return name_key(text)
 
-    The grader files a submission under its folder's (or notebook's) name with every run of characters
-    other than letters, digits and ``. @ + -`` replaced by ``_``; a roster compares its names with the
-    records' the same way, whatever their case (``"Ann Lee"``, ``"ann_lee"`` and ``"ANN_LEE"`` are one key).
-    """
-    return _identity(_student_name(str(text)))
-def _identity(student):
-    """What two students' names are compared by: compatibility-normalized and case-folded."""
-    return unicodedata.normalize("NFKC", student).casefold()
+
+def _upload(path):
+    """Which of one Canvas user's files is the latest upload: (attachment id, copy number); (-1, -1) if not
+    Canvas's."""
+    match = CANVAS.match(Path(path).name)
+    return (int(match.group("submission")), int(match.group("copy") or 0)) if match else (-1, -1)
 
 
 def _preference(unit):
-    """Which of two notebooks of one student and exercise to grade: the exact name (after Canvas's prefix), then
-    the newest (then the last in sorted order, so that the choice never depends on the order of discovery)."""
+    """Which of two notebooks of one student and exercise to grade: Canvas's latest upload, the exact name
+    (after Canvas's prefix), then the newest (then the last in sorted order, so that the choice never depends on
+    the order of discovery)."""
     path = Path(unit.notebook)
     match = CANVAS.match(path.name)
-    name = match.group("name") if match else path.name
+    name = f"{match.group('name')}.ipynb" if match else path.name
     try:
         mtime = path.stat().st_mtime
     except OSError:
         mtime = float("-inf")
-    return (name == f"{unit.exercise}.ipynb", mtime, str(path))
+    return (_upload(path), name == f"{unit.exercise}.ipynb", mtime, str(path))
 
 
-def _gradescope_names(folder):
-    """``submission_NNN`` -> the first submitter's e-mail (else sid, else name) from Gradescope's metadata."""
+def _created_at(value):
+    """Gradescope's ``created_at`` as an aware datetime, or None (a date alone, no zone, unreadable)."""
+    if isinstance(value, str):
+        try:
+            value = datetime.fromisoformat(re.sub(r"(\.\d{6})\d+", r"\1", value.strip()).replace(" -", "-")
+                                           .replace(" +", "+"))
+        except ValueError:
+            return None
+    if isinstance(value, datetime) and value.tzinfo is not None:
+        return value
+    return None
+
+
+def gradescope_submissions(folder):
+    """``submission_NNN`` -> ``(submitters, created_at)`` from Gradescope's ``submission_metadata.yml`` in `folder`.
+
+    ``submitters`` is a list of (name, aliases), one per submitter: the name is the e-mail (else the SID, else
+    the name), the aliases the e-mail and the SID; ``created_at`` an aware datetime or None. Keys are read with
+    or without Ruby's leading ``:``. A file that is missing or not YAML gives ``{}``.
+    """
     try:
-        lines = (Path(folder) / "submission_metadata.yml").read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError):
+        data = yaml.safe_load((Path(folder) / "submission_metadata.yml").read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
         return {}
-    names, current, found = {}, None, {}
-    for line in lines + ["end:"]:
-        top = re.match(r"^:?(submission_\d+|\w+):\s*$", line)
-        if top:
-            if current and found:
-                names[current] = found.get("email") or found.get("sid") or found.get("name")
-            current, found = (top.group(1) if top.group(1).startswith("submission_") else None), {}
-            continue
-        field = re.match(r"^\s*-?\s*:(email|sid|name):\s*['\"]?(.*?)['\"]?\s*$", line)
-        if current and field and field.group(2) and field.group(1) not in found:
-            found[field.group(1)] = field.group(2)
-    return names
+    plain = lambda d: {str(k).lstrip(":"): v for k, v in d.items()} if isinstance(d, dict) else {}  # noqa: E731
+    out = {}
+    for key, entry in (data.items() if isinstance(data, dict) else ()):
+        entry = plain(entry)
+        submitters = []
+        for person in entry.get("submitters") or []:
+            person = {k: str(v).strip() for k, v in plain(person).items() if v not in (None, "")}
+            name = person.get("email") or person.get("sid") or person.get("name")
+            if name:
+                aliases = [("email", person["email"])] if "email" in person else []
+                submitters.append((name, tuple(aliases + ([("sid", person["sid"])] if "sid" in person else []))))
+        out[str(key).lstrip(":")] = (submitters, _created_at(entry.get("created_at")))
+    return out
 
 
 def _walk(root, problems):
@@ -208,8 +262,22 @@ def _unwrap(folder):
         folder = entries[0]
 
 
+@dataclass
+class _Found:
+    """A notebook found, before its students are known: who it names, where it came from."""
+
+    notebook: Path
+    submitters: list  # of (name, aliases)
+    source: tuple
+    origin: str = ""
+    submitted: datetime = None
+    time_source: str = ""
+    late_flag: bool = False
+    handed_in: str = ""
+
+
 def _candidates(given, problems, workdir, limits):
-    """(notebook, student, source, origin) of one path given on the command line."""
+    """The :class:`_Found` notebooks of one path given on the command line."""
     if given.suffix.lower() == ".zip" and given.exists() and not given.is_dir():
         if workdir is None:
             problems.append(f"{given}: zips are opened by particles grade only; unzip it first")
@@ -221,33 +289,43 @@ def _candidates(given, problems, workdir, limits):
             problems.append(str(error))
             return []
         top = _unwrap(folder)
-        return [(nb, *_who(top, parts, ("zip", str(given))), f"{given}:{Path(*parts)}")
+        return [_who(nb, top, parts, ("zip", str(given)), f"{given}:{Path(*parts)}")
                 for nb, parts in _walk(top, problems)]
     if given.is_dir():
-        return [(nb, *_who(given, parts, ("folder", str(given))), "") for nb, parts in _walk(given, problems)]
+        return [_who(nb, given, parts, ("folder", str(given)), "") for nb, parts in _walk(given, problems)]
     if given.exists() or given.is_symlink():
-        return [(given, _student_name(given.stem), ("file", str(given.resolve())), "")]
+        return [_Found(given, [(given.stem, ())], ("file", str(given.resolve())), handed_in=given.name)]
     problems.append(f"{given} does not exist")
     return []
 
 
-def _who(root, parts, place):
-    """The student of the notebook at `parts` under `root`, and the place it came from."""
+def _who(notebook, root, parts, place, origin):
+    """Who the notebook at `parts` under `root` names, and the place it came from."""
+    found = _named(notebook, root, parts, place, origin)
+    found.handed_in = Path(*parts).as_posix()
+    return found
+
+
+def _named(notebook, root, parts, place, origin):
     if len(parts) > 1:
         folder = parts[0]
         match = MOODLE.match(folder)
         if re.fullmatch(r"submission_\d+", folder):
-            folder = _gradescope_names(root).get(folder, folder)
-        elif match:
+            submitters, created = gradescope_submissions(root).get(folder, ([(folder, ())], None))
+            return _Found(notebook, submitters or [(folder, ())], (*place, "folder", folder), origin, created,
+                          "Gradescope's submission_metadata.yml" if created else "")
+        if match:
             folder = match.group("name")
-        return _student_name(folder), (*place, "folder", parts[0])
+        return _Found(notebook, [(folder, ())], (*place, "folder", parts[0]), origin)
     match = CANVAS.match(parts[0])
     if match:
-        return _student_name(match.group("login")), (*place, "canvas", match.group("login"), match.group("user"))
-    return _student_name(Path(parts[0]).stem), (*place, "file", parts[0])
+        login, user = match.group("login"), match.group("user")
+        return _Found(notebook, [(login, (("canvas_id", user), ("login", login)))], (*place, "canvas", user),
+                      origin, late_flag=bool(match.group("late")))
+    return _Found(notebook, [(Path(parts[0]).stem, ())], (*place, "file", parts[0]), origin)
 
 
-def find_submissions(paths, exercises, exercise=None, *, workdir=None, limits=DEFAULT_LIMITS):
+def find_submissions(paths, exercises, exercise=None, *, workdir=None, limits=DEFAULT_LIMITS, identity=None):
     """Expand notebooks, folders and zips into :class:`Unit` s and a list of problems.
 
     Parameters
@@ -263,6 +341,8 @@ def find_submissions(paths, exercises, exercise=None, *, workdir=None, limits=DE
         notebooks are graded; without it a zip is a problem.
     limits : particles.course.grading.intake.Limits
         What a notebook and a zip may hold.
+    identity : particles.course.term.identity.Identity, optional
+        Who is in the course (default: whoever the submissions name); students it admits are added to it.
 
     Returns
     -------
@@ -272,55 +352,85 @@ def find_submissions(paths, exercises, exercise=None, *, workdir=None, limits=DE
     problems : list of str
         One line each: notebooks whose exercise could not be told, paths that
         do not exist, zips refused, links not followed, notebooks not graded
-        and why.
+        and why, submissions of names that are no roster student's.
     """
+    identity = Identity() if identity is None else identity
     problems, found, seen = [], [], set()
     for given in map(Path, paths):
-        for nb, student, source, origin in _candidates(given, problems, workdir, limits):
-            key = (os.path.realpath(nb), _identity(student))
+        for candidate in _candidates(given, problems, workdir, limits):
+            key = (os.path.realpath(candidate.notebook), tuple(name_key(n) for n, _ in candidate.submitters))
             if key in seen:  # the same file given twice: one submission
                 continue
             seen.add(key)
-            where = origin or str(nb)
-            try:
-                content, rejected = read_notebook(nb, limits), ""
-            except NotebookRejected as error:
-                content, rejected = None, f"your notebook {Path(origin or nb).name} could not be read: it {error}"
-            except (ValueError, MemoryError) as error:  # never a run stopped by one file
-                content, rejected = None, (f"your notebook {Path(origin or nb).name} could not be read "
-                                           f"({type(error).__name__}: {' '.join(str(error).split())[:200]})")
-            name = _exercise_of(nb, content, exercises, exercise)
-            if name is None:
-                problems.append(f"{where}: cannot tell which exercise this is; pass --exercise"
-                                + (f" ({rejected})" if rejected else ""))
-                continue
-            if rejected:
-                problems.append(f"{where}: 0 points: {rejected}")
-            found.append((Unit(student, name, nb, rejected, origin), source))
-    spelling = {}
-    for unit, _ in sorted(found, key=lambda f: f[0].student):
-        spelling.setdefault(_identity(unit.student), unit.student)
+            unit = _read(candidate, exercises, exercise, problems, limits)
+            if unit is not None:
+                found += [(unit, candidate, who) for who in candidate.submitters]
+    admitted = {}  # students admitted in the sorted order of their names (the first spelling names them) ...
+    for k in sorted(range(len(found)), key=lambda k: (filing_name(found[k][2][0]), found[k][0].where)):
+        unit, _, (name, aliases) = found[k]
+        admitted[k] = _admitted(unit, name, aliases, identity, problems)
+    units = [admitted[k] for k in range(len(found))]  # ... their notebooks kept in the order they were found
+    return _one_per_student(units, problems), problems
+
+
+def _read(candidate, exercises, exercise, problems, limits):
+    """The unit of a found notebook (its student still to decide), or None when its exercise is unknown."""
+    nb, origin = candidate.notebook, candidate.origin
+    where = origin or str(nb)
+    try:
+        content, rejected = read_notebook(nb, limits), ""
+    except NotebookRejected as error:
+        content, rejected = None, f"your notebook {Path(origin or nb).name} could not be read: it {error}"
+    except (ValueError, MemoryError) as error:  # never a run stopped by one file
+        content, rejected = None, (f"your notebook {Path(origin or nb).name} could not be read "
+                                   f"({type(error).__name__}: {' '.join(str(error).split())[:200]})")
+    name = _exercise_of(nb, content, exercises, exercise)
+    if name is None:
+        problems.append(f"{where}: cannot tell which exercise this is; pass --exercise"
+                        + (f" ({rejected})" if rejected else ""))
+        return None
+    if rejected:
+        problems.append(f"{where}: 0 points: {rejected}")
+    return Unit("", name, nb, rejected, origin, submitted=candidate.submitted, time_source=candidate.time_source,
+                late_flag=candidate.late_flag, place=candidate.source, handed_in=candidate.handed_in)
+
+
+def _admitted(unit, name, aliases, identity, problems):
+    """A copy of `unit` for the submitter `name`, as the course's identity knows them."""
+    person = identity.admit(name, aliases)
+    own = dataclasses.replace(unit, student=person.name if person is not None else filing_name(name),
+                              aliases=tuple(aliases))
+    if person is None:
+        own.on_roster = False
+        problems.append(f"{unit.where}: {name!r} is no student of the roster (nor an alias of one): graded as "
+                        f"{own.student}; add the name to their roster line's aliases")
+    return own
+
+
+def _one_per_student(units, problems):
+    """One unit per student and exercise: of one place, the preferred notebook; of several places, a conflict."""
     groups = {}
-    for unit, source in found:
-        unit.student = spelling[_identity(unit.student)]
-        groups.setdefault((unit.student, unit.exercise), {}).setdefault(source, []).append(unit)
-    units = []
+    for unit in units:
+        groups.setdefault((unit.student, unit.exercise), {}).setdefault(unit.place, []).append(unit)
+    out = []
     for (student, name), sources in groups.items():
         picks = []
-        for own in sources.values():  # one place: the exact name, else the newest
+        for own in sources.values():  # one place: the latest upload, the exact name, the newest
             keep = max(own, key=_preference)
             picks.append(keep)
-            problems += [f"{drop.where}: {student} has several notebooks for {name}; graded {keep.where}"
+            which = "the latest upload, " if _upload(keep.notebook) > (-1, -1) else ""
+            problems += [f"{drop.where}: {student} has several notebooks for {name}; graded {which}{keep.where}"
                          for drop in own if drop is not keep]
         if len(picks) == 1:
-            units.append(picks[0])
+            out.append(picks[0])
             continue
         both = " and ".join(p.where for p in picks)
-        reason = (f"{len(picks)} notebooks from different places map to student {student} for {name} ({both}); "
-                  "none was graded: keep one and grade again")
-        problems.append(f"{student}: 0 points: {reason}")
-        units.append(Unit(student, name, picks[0].notebook, reason, both))
-    return units, problems
+        yours = " and ".join(p.handed_in or Path(p.notebook).name for p in picks)  # without our folders
+        reason = f"{len(picks)} notebooks from different places are yours for {name} ({yours}); none was graded"
+        problems.append(f"{student}: 0 points: {len(picks)} notebooks from different places map to student "
+                        f"{student} for {name} ({both}); none was graded: keep one and grade again")
+        out.append(Unit(student, name, picks[0].notebook, reason, both, aliases=picks[0].aliases))
+    return out
 
 
 def released_exercise(root, exercise):

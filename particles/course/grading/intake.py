@@ -175,8 +175,8 @@ def read_notebook(path, limits=DEFAULT_LIMITS):
     try:
         notebook = json.loads(text)
     except json.JSONDecodeError as error:
-        raise NotebookRejected(f"is not valid JSON ({error.msg} at line {error.lineno}, column {error.colno})") \
-            from None
+        message = error.msg.removesuffix(" at")  # "Unterminated string starting at": never "at at"
+        raise NotebookRejected(f"is not valid JSON ({message} at line {error.lineno}, column {error.colno})") from None
     except ValueError as error:  # e.g. an integer of more digits than Python converts
         raise NotebookRejected(f"is not valid JSON ({_one_line(error, 120)})") from None
     except RecursionError:

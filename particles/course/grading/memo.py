@@ -1,7 +1,7 @@
 """Reference results computed once per grading session: the decorator :func:`memoized`.
 
 One pytest session of the grader grades a batch of notebooks (see
-:mod:`particles.course.grading.driver`). The public tests ask every notebook the
+:mod:`particles.course.grading.session`). The public tests ask every notebook the
 same questions, and the hidden tests ask the same ones of every notebook graded
 with the same seed, so a reference that a test computes from its own inputs (a
 measured stability limit, the global errors of the reference stepper, a relaxed

@@ -45,7 +45,7 @@ Fixtures:
 Options: ``--submission NOTEBOOK`` (default: ``solutions/NN_topic.ipynb`` when
 it exists, the master, else ``exercises/NN_topic.ipynb``, the student's own
 copy), ``--grading-seed``, ``--public-only``, ``--grading-results FILE``
-(one JSON record per test, read by :mod:`particles.course.grading.driver`),
+(one JSON record per test, read by :mod:`particles.course.grading.session`),
 ``--grading-batch FILE`` (several notebooks, each with its own seed, graded
 one after the other in this session, each by its own worker: the pytest
 start-up and the reference library are paid once per batch),
@@ -58,7 +58,7 @@ submission's record). Without them, ``pytest tests/exercises`` grades
 the masters, which must score full marks.
 
 When the driver passes a signing key (see
-:data:`particles.course.grading.driver.TOKEN_FD`), the records file holds
+:data:`particles.course.results.signing.TOKEN_FD`), the records file holds
 ``{"body": JSON text, "signature": HMAC of it}``; the driver trusts it only
 with a valid signature and a pytest exit status of 0 or 1.
 """
@@ -83,6 +83,7 @@ from ..paths import project_root
 from .blame import blame, function_of, stub_functions
 from ..results.records import SessionRecord, TestRecord
 from ..walls.limits import check_limit
+from ..walls.syscalls import PARENT_VARIABLE, die_with_parent
 from ..worker.runner import GradingFailure, Submission
 
 __all__ = ["record_of"]
@@ -143,6 +144,8 @@ def pytest_configure(config):
     config._particles_jobs = jobs
     config._particles_token = _read_token()
     protect_this_process()  # no process of the same uid may read this session's memory or environment
+    if os.environ.get(PARENT_VARIABLE):  # a grading session: it ends with the driver or worker that started it
+        die_with_parent(int(os.environ.pop(PARENT_VARIABLE)))
     config._particles_plan = None
     config._particles_seed = seed
     config._particles_results = {job["id"]: SessionRecord(id=job["id"], seed=job["seed"]) for job in jobs}

@@ -19,6 +19,7 @@ graded each exercise.
 
 import ast
 import hashlib
+import threading
 from pathlib import Path
 
 from ..walls.integrity import library_checksum
@@ -26,6 +27,25 @@ from ..walls.integrity import library_checksum
 __all__ = ["tests_version", "tests_files", "library_digest"]
 
 _DIGITS = 12
+
+_PARSING = threading.RLock()
+
+
+def _parse(source, filename="<unknown>"):
+    """``ast.parse``, one thread at a time, tried again once on CPython's spurious recursion-depth error.
+
+    On CPython 3.11 (3.11.7 here) the syntax-tree builder keeps its recursion depth per interpreter, not per
+    thread: two threads parsing at once (the local pool's sessions taking their tests' versions, a cluster
+    worker's task beside its event loop) can fail with ``SystemError: AST constructor recursion depth
+    mismatch`` (CPython issue 106905) although the source is fine.
+    """
+    with _PARSING:
+        try:
+            return ast.parse(source, filename=filename)
+        except SystemError as error:
+            if "recursion depth mismatch" not in str(error):
+                raise
+            return ast.parse(source, filename=filename)
 
 
 def tests_files(root, exercise):
@@ -68,7 +88,7 @@ def tests_files(root, exercise):
 def _local_imports(path, folder):
     """The files of `folder` that the module `path` imports (top-level names only)."""
     try:
-        tree = ast.parse(path.read_bytes(), filename=str(path))
+        tree = _parse(path.read_bytes(), filename=str(path))
     except (SyntaxError, ValueError):  # a broken test module: its bytes are digested all the same
         return []
     names = []
@@ -109,7 +129,7 @@ def library_digest(package=None):
 def _version(package):
     """``__version__`` as the package's ``__init__.py`` assigns it ("unknown" when it does not)."""
     try:
-        tree = ast.parse((package / "__init__.py").read_bytes())
+        tree = _parse((package / "__init__.py").read_bytes())
     except (OSError, SyntaxError, ValueError):
         return "unknown"
     for node in tree.body:

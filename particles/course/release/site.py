@@ -1,11 +1,12 @@
 """The course site: lectures executed and rendered as static HTML (``particles site``).
 
 ``build_site`` executes every lecture notebook (``lectures/NN_topic.ipynb``)
-in a fresh Jupyter kernel, converts it to a self-contained HTML page with
-nbconvert (figures and animation players embedded), adds a navigation bar,
-and writes an index in lecture order. The student notebooks linked from the
-lectures (``../exercises/...``) are copied next to the pages, so the folder
-can be published as it is.
+and every appendix (``lectures/A1_topic.ipynb``, ...) in a fresh Jupyter
+kernel, converts it to a self-contained HTML page with nbconvert (figures
+and animation players embedded), adds a navigation bar, and writes an index
+in lecture order, the appendices after the lectures. The student notebooks
+linked from the lectures (``../exercises/...``) are copied next to the
+pages, so the folder can be published as it is.
 
 The site works offline, from a disk or any static host: a page loads only
 files of the site folder and ``data:`` URLs. Figures, animation players and
@@ -34,7 +35,8 @@ from pathlib import Path
 
 import nbformat
 
-__all__ = ["lecture_notebooks", "execute_notebook", "notebook_summary", "build_site", "mathjax_source"]
+__all__ = ["lecture_notebooks", "execute_notebook", "notebook_summary", "build_site", "mathjax_source",
+           "copy_mathjax"]
 
 MATHJAX = "mathjax/tex-svg-full.js"  # the site's copy, relative to its pages
 
@@ -84,7 +86,7 @@ FONT_AWESOME = re.compile(r"<link[^>]*font-awesome[^>]*>\s*")
 
 
 def lecture_notebooks(folder="lectures"):
-    """Lecture notebooks ``NN_*.ipynb`` of `folder`, in lecture order.
+    """Lecture notebooks ``NN_*.ipynb`` of `folder`, in lecture order, then its appendices ``A1_*.ipynb``, ....
 
     Parameters
     ----------
@@ -94,7 +96,8 @@ def lecture_notebooks(folder="lectures"):
     Returns
     -------
     list of Path
-        Sorted by file name, so by lecture number; other notebooks are left out.
+        The lectures sorted by file name, so by lecture number, then the
+        appendices by their number; other notebooks are left out.
 
     Raises
     ------
@@ -104,7 +107,7 @@ def lecture_notebooks(folder="lectures"):
     folder = Path(folder)
     if not folder.is_dir():
         raise ValueError(f"lectures folder {str(folder)!r} does not exist")
-    return sorted(p for p in folder.glob("[0-9][0-9]_*.ipynb"))
+    return sorted(folder.glob("[0-9][0-9]_*.ipynb")) + sorted(folder.glob("A[0-9]_*.ipynb"))
 
 
 def execute_notebook(path, timeout=600, kernel_name="python3"):
@@ -204,8 +207,9 @@ def mathjax_source():
     return folder
 
 
-def _copy_mathjax(out):
-    """Copy MathJax into ``out/mathjax``: the one bundle the pages load and what it loads lazily."""
+def copy_mathjax(out):
+    """Copy MathJax into ``out/mathjax``: the one bundle the pages load and what it loads lazily (also the review
+    pages' math, :mod:`particles.course.results.review`)."""
     source = mathjax_source()
 
     def others(folder, names):  # the other bundles at the top level, which no page loads
@@ -235,8 +239,9 @@ def build_site(out="site", lectures="lectures", executed=None, timeout=600, log=
     out : str or Path
         Output folder (created; existing pages are overwritten).
     lectures : str or Path
-        Folder of ``NN_topic.ipynb`` lecture notebooks; ``../exercises`` next to
-        it is copied to ``out/exercises`` when it exists.
+        Folder of ``NN_topic.ipynb`` lecture notebooks (and ``A1_topic.ipynb``
+        appendices); ``../exercises`` next to it is copied to ``out/exercises``
+        when it exists.
     executed : dict, optional
         Already executed notebooks by path name, to skip running them again.
     timeout : float
@@ -276,7 +281,7 @@ def build_site(out="site", lectures="lectures", executed=None, timeout=600, log=
         notebooks.append(nb)
         pages.append((path.with_suffix(".html").name, title, summary))
     written = [out / "index.html"]
-    _copy_mathjax(out)
+    copy_mathjax(out)
     for k, nb in enumerate(notebooks):
         if "widgets" in nb.metadata:  # a widget's saved state: no use without a kernel
             nb = copy.deepcopy(nb)
@@ -285,15 +290,20 @@ def build_site(out="site", lectures="lectures", executed=None, timeout=600, log=
         target = out / pages[k][0]
         target.write_text(_page(body, _nav(pages, k)), encoding="utf-8")
         written.append(target)
-    items = "\n".join(
-        f'<li><a href="{name}">{html.escape(title)}</a><br><span>{html.escape(summary)}</span></li>'
-        for name, title, summary in pages)
+    def items(chosen):
+        return "\n".join(f'<li><a href="{name}">{html.escape(title)}</a><br><span>{html.escape(summary)}</span></li>'
+                         for name, title, summary in chosen)
+
+    appendices = [page for page in pages if page[0].startswith("A")]
+    listed = f"<ol>{items([page for page in pages if page not in appendices])}</ol>"
+    if appendices:
+        listed += f"<h2>Appendices</h2><ul>{items(appendices)}</ul>"
     index = (f"<!DOCTYPE html><html><head>{ERROR_COLLECTOR}<meta charset='utf-8'>"
              f"<title>Particle systems and mass-spring models</title>{STYLE}{MATHJAX_SCRIPTS}"
              "<style>body{font:16px/1.5 system-ui,sans-serif;max-width:52em;margin:2em auto;padding:0 1em}"
              "li{margin:0.8em 0}span{color:#555}</style></head><body>"
              "<h1>Particle systems and mass-spring models</h1>"
-             f"<p>Executable lecture notes, in teaching order.</p><ol>{items}</ol></body></html>")
+             f"<p>Executable lecture notes, in teaching order.</p>{listed}</body></html>")
     (out / "index.html").write_text(index, encoding="utf-8")
     exercises = Path(lectures).parent / "exercises"
     if exercises.is_dir():

@@ -1,40 +1,27 @@
-"""Grades into the LMS: the gradebook import CSVs of Canvas and Moodle, students matched through a roster.
+r"""Grades into the LMS: the gradebook import CSVs of Canvas and Moodle, students matched through a roster.
 
-``particles export OUT --roster ROSTER --canvas FILE --moodle FILE`` reads the records of a graded folder
-(``OUT/records/``, :mod:`particles.course.results.store`) and writes one row per student of the roster, one
+``particles export OUT --roster ROSTER --canvas FILE --moodle FILE`` reads the term's current records from the
+course record of a graded folder (``OUT/course.sqlite``, :mod:`particles.course.term.database`) and writes one
+row per student of the roster, one
 column per exercise (the record's :attr:`~particles.course.results.records.SubmissionRecord.total`: tests,
 written answers graded by people, minus the late penalty) and a total column.
 
-The roster (CSV, UTF-8, a header line, then one line per student; columns in any order, names compared
-case-insensitively, ``_`` and spaces alike; other columns are ignored, so Canvas's own gradebook export is a
-roster once ``--name-column`` names its column of the grader's names, e.g. ``"SIS Login ID"``; a
-cell is read without the white space around it):
-
-=====================  ===================  ======================================================
-column                 also read under      what
-=====================  ===================  ======================================================
-``submission_name``                         the name the grader files the student under: the
-                                            submission's folder (or notebook) name, e.g. a login
-                                            (required; ``--name-column`` picks another column)
-``name``               ``Student``          the student's name as the LMS shows it
-``canvas_id``          ``ID``               Canvas's numeric user ID
-``sis_user_id``        ``SIS User ID``      Canvas's SIS User ID
-``sis_login_id``       ``SIS Login ID``     Canvas's SIS Login ID
-``section``            ``Section``          Canvas's section (shown, not used to match)
-``email``              ``Email address``    Moodle's email address
-``username``           ``Username``         Moodle's username
-``idnumber``           ``ID number``        Moodle's ID number
-=====================  ===================  ======================================================
-
-A roster is refused, naming its file and line, when it is empty, lacks the name column, repeats a name (as the
-grader compares them: :func:`particles.course.grading.discovery.student_key`) or a non-empty identifier, has a
-Canvas ID that is not a number or an identifier starting with a spreadsheet formula character. Canvas's
-``Points Possible`` line and its test student (``Student, Test`` without the name cell) are skipped.
+The roster is read by :mod:`particles.course.term.roster` (its columns, the students' aliases and its checks are
+documented there): the export has one row per roster student, matched to their records through
+:mod:`particles.course.term.identity` like everything else the course tools match.
 
 **Canvas** (`Canvas's guide`_, `Canvas's importer`_). Columns: ``Student, ID, SIS User ID, SIS Login ID,
 Section``, one column per exercise titled with the exercise's name, then ``Final Points`` (the total). The second
 line is ``Points Possible``: each exercise's points, ``(read only)`` under the total. Canvas matches a student by
-``ID``, else ``SIS User ID``, else ``SIS Login ID``, else by name; ``Section`` is not used. A column is an existing
+``ID``, else ``SIS User ID``, else ``SIS Login ID``, else by name, exactly (its ``name`` or ``sortable_name``);
+``Section`` is not used. Canvas's reader also rewrites every cell that looks like a number with a decimal comma
+(``1,5`` becomes ``1.5``), so an identifier such as ``12,345`` cannot match. :func:`~particles.course.results.importers.canvas_match` says how Canvas
+will find each roster student in the file: a student it can find only by name is reported as ``matched by name``,
+one it cannot find at all (no identifier, and no name as Canvas knows it: a name that starts with ``=``, ``+``,
+``-`` or ``@`` is written with a leading ``'``, so ``-Eve`` reads as ``'-Eve``) as ``match by hand`` (Canvas lists
+the row as an unknown student, to be matched by hand on upload), and the command exits with status 1: give such a
+student their ``canvas_id`` (Canvas's numeric user ID, the ``ID`` column of its gradebook export), the one identifier
+Canvas's importer always tries first. A column is an existing
 assignment when its title is the assignment's (or ends with ``(assignment id)``), else Canvas offers to create a
 new assignment of that title with the points of the ``Points Possible`` line: name the assignments after the
 exercises (``01_integrator_order``) or let the import create them. Columns whose title holds ``Current Score``,
@@ -42,27 +29,35 @@ exercises (``01_integrator_order``) or let the import create them. Columns whose
 ``Override Grade`` or ``Override Status`` are read-only for the importer: the total is ``Final Points`` so that it
 is shown and never imported as an assignment (an exercise named so is refused). Canvas has no column for a
 comment (a ``Notes`` column is imported only where the course made one), so a missing submission is a 0 there and
-"missing" in the report. UTF-8, comma-separated, no byte-order mark.
+"missing" in the report; the feedback goes back as files (:mod:`particles.course.results.returned`). UTF-8,
+comma-separated, no byte-order mark; cells with commas, quotes or line breaks are quoted (RFC 4180).
 
 **Moodle** (`Moodle's guide`_, `Moodle's importer`_). Columns: the identifier (``Email address``, ``Username`` or
 ``ID number``: ``--moodle-id``), ``Full name``, then for each exercise its grade (titled with the exercise's name)
 and ``<exercise> feedback`` (how the grade was made, or ``missing: no graded submission``), then ``Total``. On
 upload choose encoding UTF-8 and separator comma (the defaults; a byte-order mark would be removed, none is
 written), map from the identifier column to ``useremail``/``username``/``useridnumber``, map each exercise to its
-grade item (or "new grade item"), each feedback column to "feedback for" that item (Moodle's note: import a
-feedback with its grade) and leave ``Full name`` and ``Total`` on "ignore" (Moodle sums its own total; a grade
-above ``gradepointmax``, 100 by default, fails the import). Moodle aborts the whole import at a row whose user it
-cannot find, and a row with an empty identifier takes the previous row's user: a roster student without the chosen
-identifier is left out of the file and reported.
+grade item (or "new grade item") and leave ``Full name`` and ``Total`` on "ignore" (Moodle sums its own total; a
+grade above ``gradepointmax``, 100 by default, fails the import). Moodle offers a feedback column only for a grade
+item that already exists ("feedback for" that item): when the exercises' grade items are new, import the grades
+once with the feedback columns on "ignore", then import the file again, mapping each feedback column to its item.
 
-In both files a number is written with a dot and at most 6 decimals, without exponent or trailing zeros
+Moodle reads the file with PHP's ``fgetcsv``, whose escape character is the backslash: inside a quoted cell ``\"``
+does not end the cell, and a quote after a backslash is not doubled. The cells are written for that reader
+(:func:`~particles.course.results.importers.moodle_cell`), so that ``Gus\", jr`` stays one cell, and a cell ending in a backslash gets a trailing
+space, which Moodle trims from every cell. Moodle aborts the whole import at a row whose user it cannot find,
+and skips the user look-up for an identifier PHP's ``empty()`` calls empty (``""``, and ``"0"``, after trimming
+white space), so that such a row's grades go to the previous row's user: a roster student whose identifier is
+empty to PHP, or holds a line break, is left out of the file and reported (pick another ``--moodle-id``).
+
+Both files: a number is written with a dot and at most 6 decimals, without exponent or trailing zeros
 (``2.5``, ``10``, ``0.00001``), and a text cell starting with ``=``, ``+``, ``-``, ``@``, a tab or a carriage
-return (a spreadsheet formula) gets a leading ``'`` (`OWASP`_); cells with commas, quotes or line breaks are quoted
-(RFC 4180).
+return (a spreadsheet formula) gets a leading ``'`` (`OWASP`_).
 
 Nothing is dropped: a record whose student is on no line of the roster, a roster student without a record of an
-exercise (exported as 0) and a student left out of a file are all listed in ``OUT/lms-report.csv`` (columns
-:data:`REPORT_COLUMNS`), and the command exits with status 1 when a grade did not reach a file.
+exercise (exported as 0), a student left out of a file and a student Canvas cannot match are all listed in
+``OUT/lms-report.csv`` (columns :data:`REPORT_COLUMNS`), and the command exits with status 1 when a grade did not
+reach a file or will not reach its student.
 
 .. _Canvas's guide: https://community.canvaslms.com/t5/Instructor-Guide/How-do-I-import-grades-in-the-Gradebook/ta-p/807
 .. _Canvas's importer: https://github.com/instructure/canvas-lms/blob/master/lib/gradebook_importer.rb
@@ -72,20 +67,18 @@ exercise (exported as 0) and a student left out of a file are all listed in ``OU
 """
 
 import csv
-import json
 import math
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..grading.discovery import student_key
-from .records import SubmissionRecord
+from ..term.database import DATABASE, TermRecord
+from ..term.roster import CANVAS_POINTS_ROW, FORMULA, NAME_COLUMN, read_roster
+from .importers import canvas_match, canvas_unmatched, moodle_cell, moodle_left_out
 
 __all__ = ["CANVAS_DOC", "CANVAS_IMPORTER", "MOODLE_DOC", "MOODLE_IMPORTER", "CANVAS_STUDENT_COLUMNS",
            "CANVAS_TOTAL", "CANVAS_POINTS_ROW", "CANVAS_READ_ONLY", "CANVAS_RESERVED", "MOODLE_IDENTIFIERS",
-           "MOODLE_NAME", "MOODLE_TOTAL", "MOODLE_MISSING", "REPORT_COLUMNS", "ROSTER_COLUMNS", "NAME_COLUMN",
-           "RosterError", "ExportError", "RosterStudent", "Roster", "Export", "read_roster", "read_records",
-           "match", "lms_number", "lms_text", "canvas_rows", "moodle_rows", "export_grades"]
+           "MOODLE_NAME", "MOODLE_TOTAL", "MOODLE_MISSING", "REPORT_COLUMNS", "ExportError", "Export",
+           "read_records", "match", "lms_number", "lms_text", "canvas_rows", "moodle_rows", "export_grades"]
 
 CANVAS_DOC = "https://community.canvaslms.com/t5/Instructor-Guide/How-do-I-import-grades-in-the-Gradebook/ta-p/807"
 CANVAS_IMPORTER = "https://github.com/instructure/canvas-lms/blob/master/lib/gradebook_importer.rb"
@@ -96,7 +89,6 @@ CANVAS_STUDENT_COLUMNS = ("Student", "ID", "SIS User ID", "SIS Login ID", "Secti
 """The first columns of a Canvas gradebook CSV, in Canvas's order (its importer checks the order)."""
 CANVAS_TOTAL = "Final Points"
 """The total's title: a read-only column for Canvas's importer, shown, never imported as an assignment."""
-CANVAS_POINTS_ROW = "Points Possible"
 CANVAS_READ_ONLY = "(read only)"
 CANVAS_RESERVED = ("Current Score", "Current Points", "Current Grade", "Final Score", "Final Points", "Final Grade",
                    "Override Score", "Override Grade", "Override Status")
@@ -109,32 +101,13 @@ MOODLE_TOTAL = "Total"
 MOODLE_MISSING = "missing: no graded submission"
 
 REPORT_COLUMNS = ("problem", "student", "exercise", "points", "detail")
-"""The columns of ``lms-report.csv``; ``problem`` is one of ``not on roster``, ``missing``, ``left out``,
-``matched by name``."""
+"""The columns of ``lms-report.csv``; ``problem`` is one of ``not on roster``, ``not graded yet``, ``missing``,
+``left out``, ``matched by name``, ``match by hand``."""
 
-NAME_COLUMN = "submission_name"
-ROSTER_COLUMNS = {"submission_name": ("submission_name",), "name": ("name", "Student"),
-                  "canvas_id": ("canvas_id", "ID"), "sis_user_id": ("sis_user_id", "SIS User ID"),
-                  "sis_login_id": ("sis_login_id", "SIS Login ID"), "section": ("section", "Section"),
-                  "email": ("email", "Email address"), "username": ("username", "Username"),
-                  "idnumber": ("idnumber", "ID number")}
-"""A roster's columns: field -> the titles it is read under (compared case-insensitively, ``_`` as a space)."""
-
-_IDENTIFIERS = ("canvas_id", "sis_user_id", "sis_login_id", "email", "username", "idnumber")
-_FORMULA = ("=", "+", "-", "@", "\t", "\r")
-_CANVAS_TEST_STUDENTS = ("Student, Test", "Test Student")
-
-
-class RosterError(ValueError):
-    """A roster that cannot be used: the message names the file, the line and what was expected."""
 
 
 class ExportError(ValueError):
     """Records that cannot be exported (no records folder, a record that cannot be read, a clash)."""
-
-
-def _title(text):
-    return re.sub(r"[\s_]+", " ", str(text).strip()).casefold()
 
 
 def lms_number(x):
@@ -149,190 +122,38 @@ def lms_number(x):
 def lms_text(text):
     """A text cell a spreadsheet will not run: ``'`` before a leading ``= + - @``, tab or carriage return."""
     text = str(text)
-    return "'" + text if text.startswith(_FORMULA) else text
+    return "'" + text if text.startswith(FORMULA) else text
 
 
-@dataclass(frozen=True)
-class RosterStudent:
-    """One line of a roster: the grader's name of the student and the LMS identifiers (``""`` when not given)."""
-
-    submission_name: str
-    line: int
-    name: str = ""
-    canvas_id: str = ""
-    sis_user_id: str = ""
-    sis_login_id: str = ""
-    section: str = ""
-    email: str = ""
-    username: str = ""
-    idnumber: str = ""
-
-    @property
-    def key(self):
-        """The key records are matched by (:func:`~particles.course.grading.discovery.student_key`)."""
-        return student_key(self.submission_name)
-
-    @property
-    def display_name(self):
-        """The name to show: ``name``, else the grader's name."""
-        return self.name or self.submission_name
-
-
-@dataclass
-class Roster:
-    """The students of a roster file, in the file's order; ``columns``: the fields its header has."""
-
-    path: Path
-    students: list
-    columns: tuple
-
-
-def _header(path, row, name_column):
-    """field -> column index of a roster's header row (the name column as ``submission_name``)."""
-    aliases = {_title(t): name for name, titles in ROSTER_COLUMNS.items() for t in titles if name != NAME_COLUMN}
-    aliases[_title(name_column)] = NAME_COLUMN
-    where, twice = {}, []
-    for index, title in enumerate(row):
-        name = aliases.get(_title(title))
-        if name is None:
-            continue
-        if name in where:
-            twice.append(f"columns {where[name] + 1} and {index + 1} are both {name}")
-        where[name] = index
-    if twice:
-        raise RosterError(f"roster {path}, line 1: {'; '.join(twice)}")
-    if NAME_COLUMN not in where:
-        raise RosterError(f"roster {path}, line 1: no column {name_column!r} (the name the grader files each "
-                          f"student's submission under); its columns are {', '.join(map(repr, row))}; "
-                          "pass --name-column to use another")
-    if _title(name_column) in {_title(t) for n, ts in ROSTER_COLUMNS.items() for t in ts if n != NAME_COLUMN}:
-        # --name-column "SIS Login ID": the column is both the grader's name and that identifier
-        other = next(n for n, ts in ROSTER_COLUMNS.items() if n != NAME_COLUMN
-                     and _title(name_column) in map(_title, ts))
-        if other in where:
-            raise RosterError(f"roster {path}, line 1: columns {where[other] + 1} and {where[NAME_COLUMN] + 1} "
-                              f"are both {other}")
-        where[other] = where[NAME_COLUMN]
-    return where
-
-
-def _student(path, line, cells, where):
-    values = {name: cells[index].strip() if index < len(cells) else "" for name, index in where.items()}
-    for name in _IDENTIFIERS:
-        value = values.get(name, "")
-        if value.startswith(_FORMULA):
-            raise RosterError(f"roster {path}, line {line}: {name} {value!r} starts with {value[0]!r}, which "
-                              "spreadsheets run as a formula; expected an identifier")
-    if values.get("canvas_id") and not values["canvas_id"].isdigit():
-        raise RosterError(f"roster {path}, line {line}: canvas_id {values['canvas_id']!r} is not Canvas's numeric "
-                          "user ID (expected digits only)")
-    if not values[NAME_COLUMN]:
-        raise RosterError(f"roster {path}, line {line}: the name column is empty; expected the name the grader "
-                          "files this student's submission under")
-    return RosterStudent(line=line, **values)
-
-
-def _check_unique(path, students):
-    """Refuse two lines with one grader name (as the grader compares them) or one non-empty identifier."""
-    for name in ("key", *_IDENTIFIERS):
-        seen = {}
-        for student in students:
-            value = getattr(student, name)
-            value = value.casefold() if name in ("email", "key") else value
-            if not value:
-                continue
-            if value in seen:
-                what = (f"the name {student.submission_name!r} is the grader's {student.key!r}, as the name on "
-                        f"line {seen[value].line} ({seen[value].submission_name!r}): names compare "
-                        "case-insensitively after the grader's normalisation" if name == "key"
-                        else f"{name} {getattr(student, name)!r} is also on line {seen[value].line}")
-                raise RosterError(f"roster {path}, line {student.line}: {what}; expected one line per student")
-            seen[value] = student
-
-
-def read_roster(path, name_column=NAME_COLUMN):
-    """Read and check a roster CSV (the columns of :data:`ROSTER_COLUMNS`).
-
-    Parameters
-    ----------
-    path : path
-        The roster: UTF-8 (a byte-order mark is allowed), a header line, one line per student.
-    name_column : str
-        The column of the grader's names of the students (default ``submission_name``; for Canvas's
-        gradebook export, e.g. ``"SIS Login ID"``).
+def read_records(out):
+    """The current records of a course output folder's record (:mod:`particles.course.term.database`).
 
     Returns
     -------
-    Roster
-
-    Raises
-    ------
-    RosterError
-        Naming the file, the line and what was expected: unreadable, empty, no name column, a duplicate name or
-        identifier, a Canvas ID that is not a number, an identifier starting with a formula character.
-    """
-    path = Path(path)
-    try:
-        text = path.read_bytes().decode("utf-8-sig")
-    except OSError as error:
-        raise RosterError(f"roster {path}: cannot be read ({error.strerror or error})") from None
-    except UnicodeDecodeError as error:
-        raise RosterError(f"roster {path}: byte {error.start} is not UTF-8; expected a CSV saved as UTF-8") from None
-    reader = csv.reader(text.splitlines(keepends=True))
-    try:
-        header = next((row for row in reader if any(c.strip() for c in row)), None)
-        if header is None:
-            raise RosterError(f"roster {path} is empty: expected a header line ({NAME_COLUMN}, then LMS "
-                              "identifiers such as canvas_id or email) and one line per student")
-        where = _header(path, header, name_column)
-        students = []
-        for cells in reader:
-            if not any(c.strip() for c in cells):
-                continue
-            line = reader.line_num
-            if len(cells) > len(header):
-                raise RosterError(f"roster {path}, line {line}: {len(cells)} cells; expected at most "
-                                  f"{len(header)}, as in the header")
-            name = cells[where["name"]].strip() if "name" in where and where["name"] < len(cells) else ""
-            own = cells[where[NAME_COLUMN]].strip() if where[NAME_COLUMN] < len(cells) else ""
-            if CANVAS_POINTS_ROW in name or (name in _CANVAS_TEST_STUDENTS and not own):
-                continue  # lines of Canvas's own export that are no student
-            students.append(_student(path, line, cells, where))
-    except csv.Error as error:
-        raise RosterError(f"roster {path}, line {reader.line_num}: not CSV ({error})") from None
-    if not students:
-        raise RosterError(f"roster {path} has a header but no student: expected one line per student")
-    _check_unique(path, students)
-    return Roster(path, students, tuple(name for name in ROSTER_COLUMNS if name in where))
-
-
-def read_records(folder):
-    """The :class:`~particles.course.results.records.SubmissionRecord` s of a ``records/`` folder, by file.
-
-    Returns
-    -------
-    dict
-        file name -> record.
+    records : dict
+        ``"student/exercise"`` -> :class:`~particles.course.results.records.SubmissionRecord`, one per student and
+        exercise: the term's gradebook.
+    pending : list of (student, exercise, run)
+        Notebooks a run meant to grade and no run has graded since (the export says the grades are partial).
 
     Raises
     ------
     ExportError
-        When the folder does not exist or a record file cannot be read as a record (naming it).
+        When `out` holds no course record (nor a ``records/`` folder of an earlier grader to import).
     """
-    folder = Path(folder)
-    if not folder.is_dir():
-        raise ExportError(f"{folder} is not a folder of records: expected the records/ folder that "
+    out = Path(out)
+    if not (out / DATABASE).exists() and not (out / "records").is_dir():
+        raise ExportError(f"{out} holds no course record ({DATABASE}): expected the folder that "
                           "`particles grade SUBMISSIONS --out OUT` writes")
-    records = {}
-    for path in sorted(folder.glob("*.json")):
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-            if isinstance(data, dict):
-                data.pop("options", None)
-            records[path.name] = SubmissionRecord.from_dict(data)
-        except (OSError, UnicodeDecodeError, ValueError, TypeError) as error:
-            raise ExportError(f"record {path} cannot be read ({error}); grade it again or remove it") from None
-    return records
+    try:
+        term = TermRecord(out)
+    except ValueError as error:
+        raise ExportError(str(error)) from None
+    try:
+        records = {f"{student}/{exercise}": record for (student, exercise), record in term.current().items()}
+        return records, term.pending()
+    finally:
+        term.close()
 
 
 @dataclass
@@ -349,7 +170,9 @@ class Export:
     records : dict
         student key -> {exercise: SubmissionRecord}.
     unmatched : list of (str, SubmissionRecord)
-        Records whose student is on no line of the roster, with their file names.
+        Records whose student is on no line of the roster (nor an alias of one), with their ``student/exercise``.
+    pending : list of (student, exercise, run)
+        Notebooks a grading run meant to grade and no run has graded since: these grades are not final.
     """
 
     exercises: list
@@ -357,6 +180,7 @@ class Export:
     students: list
     records: dict
     unmatched: list = field(default_factory=list)
+    pending: list = field(default_factory=list)
 
     def missing(self):
         """(student, exercise) pairs of the roster without a record: exported as 0."""
@@ -373,25 +197,28 @@ class Export:
 
 
 def match(roster, records):
-    """Match records (file name -> record) with the students of a roster.
+    """Match records (``"student/exercise"`` -> record) with the students of a roster, through their names and
+    aliases (:meth:`~particles.course.term.roster.Roster.identity`).
 
     Raises
     ------
     ExportError
-        When two records of one exercise belong to one roster student (names differing only in case).
+        When two records of one exercise belong to one roster student (two of their aliases graded apart).
     """
-    keys = {s.key for s in roster.students}
+    identity = roster.identity()
+    keys = {s.submission_name: s.key for s in roster.students}
     by_student, unmatched, files, points = {}, [], {}, {}
     for name, record in records.items():
         points[record.exercise] = max(points.get(record.exercise, 0.0), record.total_max)
-        key = student_key(record.student)
-        if key not in keys:
+        person = identity.find(record.student)
+        if person is None:
             unmatched.append((name, record))
             continue
+        key = keys[person.name]
         mine = by_student.setdefault(key, {})
         if record.exercise in mine:
             raise ExportError(f"records {files[key, record.exercise]} and {name} are both {record.exercise} of "
-                              f"the roster's {key!r}: remove the one that is not theirs")
+                              f"the roster's {person.name!r}: retire the one that is not theirs")
         mine[record.exercise], files[key, record.exercise] = record, name
     return Export(sorted(points), points, list(roster.students), by_student, unmatched)
 
@@ -434,6 +261,7 @@ def moodle_rows(export, identifier="email"):
     -------
     rows : list of list of str
     left_out : list of RosterStudent
+        Students without a usable `identifier` (:func:`~particles.course.results.importers.moodle_left_out` says why).
     """
     if identifier not in MOODLE_IDENTIFIERS:
         raise ValueError(f"identifier must be one of {', '.join(MOODLE_IDENTIFIERS)}, got {identifier!r}")
@@ -442,7 +270,7 @@ def moodle_rows(export, identifier="email"):
         header += [lms_text(e), lms_text(f"{e} feedback")]
     rows, left_out = [header + [MOODLE_TOTAL]], []
     for s in export.students:
-        if not getattr(s, identifier):
+        if moodle_left_out(s, identifier):
             left_out.append(s)
             continue
         row = [getattr(s, identifier), lms_text(s.display_name)]
@@ -453,16 +281,24 @@ def moodle_rows(export, identifier="email"):
     return rows, left_out
 
 
-def _write(path, rows):
+def _write(path, rows, cell=None):
+    """Write CSV rows: RFC 4180 (Python's writer), or each cell through `cell` (:func:`~particles.course.results.importers.moodle_cell`)."""
     with open(path, "w", encoding="utf-8", newline="") as handle:
-        csv.writer(handle).writerows(rows)
+        if cell is None:
+            csv.writer(handle).writerows(rows)
+        else:
+            handle.writelines(",".join(map(cell, row)) + "\n" for row in rows)
 
 
 def _report_rows(export, problems):
     rows = [list(REPORT_COLUMNS)]
     for name, r in export.unmatched:
         rows.append(["not on roster", lms_text(r.student), lms_text(r.exercise), lms_number(r.total),
-                     lms_text(f"records/{name}: its student is on no line of the roster; not exported")])
+                     lms_text(f"{name}: its student is on no line of the roster (nor an alias); not exported")])
+    for student, exercise, run in export.pending:
+        rows.append(["not graded yet", lms_text(student), lms_text(exercise), "",
+                     lms_text(f"grading run {run} was interrupted before grading it: run particles grade --resume, "
+                              "then export again")])
     for s, e in export.missing():
         rows.append(["missing", lms_text(s.submission_name), lms_text(e), "0",
                      "no graded submission: exported as 0"])
@@ -476,7 +312,7 @@ def export_grades(out, roster, canvas=None, moodle=None, name_column=NAME_COLUMN
     Parameters
     ----------
     out : path
-        The output folder of ``particles grade --out OUT``: its ``records/`` are read, ``lms-report.csv`` written.
+        The output folder of ``particles grade --out OUT``: its course record is read, ``lms-report.csv`` written.
     roster : path
         The roster CSV (:func:`read_roster`).
     canvas, moodle : path or None
@@ -490,7 +326,8 @@ def export_grades(out, roster, canvas=None, moodle=None, name_column=NAME_COLUMN
     -------
     dict
         ``export`` (:class:`Export`), ``files`` (format -> path), ``left_out`` (format -> list of RosterStudent),
-        ``name_only`` (roster students Canvas can match only by name), ``report`` (its path).
+        ``name_only`` (roster students Canvas can match only by name), ``by_hand`` (roster students Canvas cannot
+        match: :func:`~particles.course.results.importers.canvas_match`), ``report`` (its path).
 
     Raises
     ------
@@ -506,22 +343,29 @@ def export_grades(out, roster, canvas=None, moodle=None, name_column=NAME_COLUMN
         raise ValueError("the roster, the Canvas file and the Moodle file must be three different files")
     if moodle_id not in MOODLE_IDENTIFIERS:
         raise ValueError(f"moodle_id must be one of {', '.join(MOODLE_IDENTIFIERS)}, got {moodle_id!r}")
-    export = match(read_roster(roster_path, name_column), read_records(out / "records"))
+    records, pending = read_records(out)
+    export = match(read_roster(roster_path, name_column), records)
+    export.pending = pending
     rows, left_out, problems = {}, {}, []
     if "canvas" in targets:
         rows["canvas"] = canvas_rows(export)
     if "moodle" in targets:
         rows["moodle"], left_out["moodle"] = moodle_rows(export, moodle_id)
-        problems += [("left out", s, f"roster line {s.line} has no {moodle_id}: not in the Moodle file")
+        problems += [("left out", s, f"roster line {s.line} {moodle_left_out(s, moodle_id)}: not in the Moodle file")
                      for s in left_out["moodle"]]
-    name_only = []
+    name_only, by_hand = [], []
     if "canvas" in targets:
-        name_only = [s for s in export.students if not (s.canvas_id or s.sis_user_id or s.sis_login_id)]
+        how = {id(s): canvas_match(s, lms_text(s.display_name)) for s in export.students}
+        name_only = [s for s in export.students if how[id(s)] == "name"]
+        by_hand = [s for s in export.students if not how[id(s)]]
         problems += [("matched by name", s, f"roster line {s.line} has no Canvas ID, SIS User ID or SIS Login "
-                      "ID: Canvas can match it only by its name") for s in name_only]
+                      f"ID Canvas can use: Canvas can match it only by its name {s.name!r}") for s in name_only]
+        problems += [("match by hand", s, f"roster line {s.line}: {canvas_unmatched(s, lms_text(s.display_name))}; Canvas lists the row as an "
+                      "unknown student to match by hand on upload (give it its canvas_id)") for s in by_hand]
     for fmt, path in targets.items():
-        _write(path, rows[fmt])
+        _write(path, rows[fmt], moodle_cell if fmt == "moodle" else None)
     report = out / "lms-report.csv"
     _write(report, _report_rows(export, problems))
-    return {"export": export, "files": targets, "left_out": left_out, "name_only": name_only, "report": report}
+    return {"export": export, "files": targets, "left_out": left_out, "name_only": name_only, "by_hand": by_hand,
+            "report": report}
 

@@ -4,8 +4,9 @@ A small Markdown of our own, so that nothing a student writes becomes markup
 the page did not choose: every character of the text is escaped first
 (``<script>`` shows as text), raw HTML is never passed through, links show
 their text and address as text (no ``href``), images are not loaded (their
-alt text and address show as text), and equations stay as written
-(``$...$``, ``$$...$$``: the page loads no MathJax). What it renders:
+alt text and address show as text), and equations are kept, escaped, in
+``<span class="math">`` (``$...$``, ``$$...$$``), the only elements a page's
+MathJax typesets (:mod:`particles.course.results.review`). What it renders:
 paragraphs, headings (``#``), bullet and numbered lists, block quotes,
 fenced and indented code, inline code, ``**bold**`` and ``*italic*``.
 """

@@ -8,8 +8,8 @@ Three processes hand records on (see :mod:`particles.course.grading.driver`):
 2. the driver reads them back with :meth:`SessionRecord.from_dict` and
    completes each into a :class:`SubmissionRecord` (student, notes for the
    student, the sandbox's layers, the notebook's digest);
-3. the reports (:mod:`particles.course.results.reports`) and the record store
-   (:mod:`particles.course.results.store`) read only these classes.
+3. the reports (:mod:`particles.course.results.reports`) and the course record
+   (:mod:`particles.course.term.database`) read only these classes.
 
 Every record converts to plain JSON data with ``to_dict()`` and back with
 ``from_dict()``, which rejects a missing or mistyped field by name. For
@@ -25,6 +25,8 @@ import dataclasses
 import html
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+
+from .shown import for_students
 
 __all__ = ["TestRecord", "SessionRecord", "SubmissionRecord", "score_of", "to_gradescope", "VISIBILITIES",
            "STRETCH_GOAL"]
@@ -154,8 +156,9 @@ class TestRecord(_Fields):
         return cls(**kwargs)
 
     def output(self):
-        """What the student reads under the test: "passed", or the reason (with the seed of hidden tests)."""
-        text = "passed" if self.passed else self.reason
+        """What the student reads under the test: "passed", or the reason (with the seed of hidden tests), no path
+        of the instructor's in it (:func:`~particles.course.results.shown.for_students`)."""
+        text = "passed" if self.passed else for_students(self.reason)
         if self.hidden and self.seed is not None:
             text += f" (random parameters, seed {self.seed})"
         return text
@@ -313,6 +316,12 @@ class SubmissionRecord(_HoldsTests):
         :func:`particles.course.grading.deadlines.decide`.
     tests_version : str
         Digest of the exercise's tests that graded this record (a changed test regrades what it affects).
+    run : dict or None
+        The grading run that made this record, as the course record keeps it: ``id`` and ``started``
+        (:mod:`particles.course.term.database`); None for a record no course record holds.
+    worker : str
+        The machine that graded it, when a grading cluster did (its host, worker name and address; "" on the
+        driver's own machine); ``isolation`` says the walls it had.
 
     Notes
     -----
@@ -340,6 +349,8 @@ class SubmissionRecord(_HoldsTests):
     written: list = field(default_factory=list)
     late: dict | None = None
     tests_version: str = ""
+    run: dict | None = None
+    worker: str = ""
 
     @property
     def score(self):
@@ -397,16 +408,40 @@ class SubmissionRecord(_HoldsTests):
             if self.late.get("source"):
                 lines[-1] += f" Submission time from {self.late['source']}."
         if self.tests_version:
-            lines.append(f"Graded by tests version {self.tests_version}.")
+            ran = f" in grading run {self.run['id']} of {self.run['started']}" if self.run else ""
+            lines.append(f"Graded by tests version {self.tests_version}{ran}.")
         return lines
 
-    def summary_lines(self):
-        """The lines of Gradescope's top output for this exercise: score, notes, sandbox, late work."""
-        lines = [f"{self.exercise}: {self.score:g} / {self.max_score:g} points"]
-        lines += [f"  {note}" for note in self.notes]
+    def visible_score(self, hidden_visibility="after_published"):
+        """(score, max_score) of the tests a student sees on Gradescope before grades are published.
+
+        Hidden tests count only when their visibility is ``"visible"``; Gradescope keeps the total from
+        students while a test is hidden, so what they read must not count them either.
+        """
+        shown = [t for t in self.tests if not t.hidden or hidden_visibility == "visible"]
+        return score_of(shown)
+
+    def summary_lines(self, hidden_visibility="after_published"):
+        """The lines of Gradescope's top output for this exercise: visible score, notes, sandbox, late work.
+
+        With hidden tests that students do not see yet, the score is that of the visible tests only, and the
+        late line gives the reason and the percentage, never points that would tell the hidden total.
+        """
+        hidden = hidden_visibility != "visible" and any(t.hidden for t in self.tests)
+        score, top = self.visible_score(hidden_visibility)
+        line = f"{self.exercise}: {score:g} / {top:g} points"
+        if hidden:
+            line += " on the tests you can see; the hidden tests are shown when grades are published"
+        lines = [line]
+        lines += [f"  {for_students(note)}" for note in self.notes]
         if self.sandbox:
             lines.append(f"  Sandbox of your code: {self.sandbox}")
-        lines += [f"  {line}" for line in self.late_lines()]
+        late = self.late_lines()
+        if hidden and self.late and self.penalty:
+            late[0] = f"Late: {self.late['reason']}."
+            if self.late.get("source"):
+                late[0] += f" Submission time from {self.late['source']}."
+        lines += [f"  {line}" for line in late]
         return lines
 
     def to_gradescope(self, hidden_visibility="after_published"):
@@ -429,28 +464,31 @@ def to_gradescope(student, results, hidden_visibility="after_published"):
     Returns
     -------
     dict
-        ``score``, ``max_score``, ``execution_time``, ``output`` (a summary per exercise), ``tests`` and
-        ``extra_data`` (the student, the seeds and the sandbox layers per exercise).
+        The keys of Gradescope's specification only: ``score`` (the records' totals), ``execution_time``,
+        ``output`` (a summary per exercise that counts only the tests students see before grades are published:
+        :meth:`SubmissionRecord.summary_lines`), ``output_format``, ``visibility``, ``stdout_visibility``,
+        ``tests`` and ``extra_data`` (the student, ``max_score``: the points of the records, the seeds and the
+        sandbox layers per exercise).
     """
     if hidden_visibility not in VISIBILITIES:
         raise ValueError(f"hidden_visibility must be one of {VISIBILITIES}, got {hidden_visibility!r}")
     results = [r if isinstance(r, SubmissionRecord) else SubmissionRecord.from_dict(r) for r in results]
     lines, tests = [], []
     for result in results:
-        lines += result.summary_lines()
+        lines += result.summary_lines(hidden_visibility)
         tests += result.to_gradescope(hidden_visibility)
     # the tests' points minus late penalties (and plus written grades, once merged): Gradescope takes this
-    # top-level score over the sum of the tests'
+    # top-level score over the sum of the tests' (the specification has no top-level max_score: the
+    # assignment's points are set on Gradescope; ours are kept in extra_data)
     score, top = sum(r.total for r in results), sum(r.total_max for r in results)
     return {
         "score": score,
-        "max_score": top,
         "execution_time": round(sum(r.seconds for r in results), 2),
         "output": "\n".join(lines),
         "output_format": "simple_format",
         "visibility": "visible",
         "stdout_visibility": "hidden",
-        "extra_data": {"student": student, "seeds": {r.exercise: r.seed for r in results},
+        "extra_data": {"student": student, "max_score": top, "seeds": {r.exercise: r.seed for r in results},
                        "sandbox": {r.exercise: r.isolation for r in results},
                        "tests_version": {r.exercise: r.tests_version for r in results},
                        "late": {r.exercise: r.late for r in results if r.late}},

@@ -17,7 +17,7 @@ gradebook; in Gradescope's output each written question is an entry of its own, 
 manual grading when no rubric graded it (:func:`gradescope_results`).
 
 :func:`write_outputs` writes them all into a grading run's folder, per student, as its records come in
-(the driver calls it after each batch, under its lock).
+(the driver calls it after each batch, :mod:`particles.course.grading.report`).
 """
 
 import csv
@@ -28,6 +28,7 @@ import json
 from ..grading import figures
 from .records import VISIBILITIES, SubmissionRecord, score_of, to_gradescope
 from .rubric import WrittenGrades
+from .shown import for_students, submitted_name
 
 __all__ = ["score_of", "gradescope_results", "to_gradescope", "feedback_markdown", "feedback_html",
            "write_gradebook", "write_outputs", "VISIBILITIES"]
@@ -44,9 +45,9 @@ def _records(results):
     return [r if isinstance(r, SubmissionRecord) else SubmissionRecord.from_dict(r) for r in results]
 
 
-MANUAL_OUTPUT = ("Written answer, graded by hand on Gradescope ({points} points): instructors, add a manual "
-                 "question for it in the assignment's outline")
-"""What Gradescope shows under a written question that no rubric graded here."""
+MANUAL_OUTPUT = "Written answer, graded by hand on Gradescope ({points} points)"
+"""What Gradescope shows under a written question that no rubric graded here (to add it as a manual question
+of the assignment's outline is the instructors' part: ``GRADESCOPE.md`` of the bundle says so)."""
 
 
 def _written_entry(exercise, k, top, entry, answered):
@@ -111,8 +112,8 @@ def gradescope_results(student, results, hidden_visibility="after_published", ma
     data["tests"] = tests + rest  # the top-level score is already the records' totals (written grades included)
     if any(r.written for r in results):
         data["extra_data"]["written"] = {r.exercise: r.written for r in results if r.written}
-        data["output"] = "\n".join([data["output"], *(f"{r.exercise}: {_written_summary(r)}" for r in results
-                                                      if r.written)]).strip()
+        data["output"] = "\n".join([data["output"], *(f"{r.exercise}: {_written_summary(r, hidden_visibility)}"
+                                                      for r in results if r.written)]).strip()
     return data
 
 
@@ -131,9 +132,12 @@ def _written_points(entry):
         f"not graded yet / {top}"
 
 
-def _written_summary(result):
-    return (f"Tests {_fmt(result.score)} / {_fmt(result.max_score)}; written answers, graded by people, "
-            f"{_fmt(result.written_score)} / {_fmt(result.written_max)}")
+def _written_summary(result, hidden_visibility="visible"):
+    """Tests and written answers in one line; on Gradescope (`hidden_visibility`) the visible tests only."""
+    score, top = result.visible_score(hidden_visibility)
+    hidden = score_of(result.tests) != (score, top)
+    return (f"Tests {_fmt(score)} / {_fmt(top)}{' (the tests you can see)' if hidden else ''}; written answers, "
+            f"graded by people, {_fmt(result.written_score)} / {_fmt(result.written_max)}")
 
 
 def _written_markdown(result):
@@ -143,7 +147,7 @@ def _written_markdown(result):
     out = [_written_summary(result) + ":", "", "| question | points | comment |", "| --- | ---: | --- |"]
     out += [f"| Question {_cell(w['question'])} | {_written_points(w)} | {_cell(w.get('comment', ''))} |"
             for w in result.written]
-    versions = sorted({w["rubric"] for w in result.written if w.get("rubric")})
+    versions = sorted({for_students(w["rubric"]) for w in result.written if w.get("rubric")})
     return out + ["", *(f"- Written answers graded with the rubric {v}" for v in versions)]
 
 
@@ -157,16 +161,16 @@ def feedback_markdown(student, results):
     for result in results:
         out += [f"## {result.exercise}: {_fmt(result.total)} / {_fmt(result.total_max)}", ""]
         if result.notebook:
-            out += [f"Graded notebook: `{result.notebook}`", ""]
+            out += [f"Graded notebook: `{submitted_name(result.notebook)}`", ""]
         out += ["| | test | points | what happened |", "| --- | --- | ---: | --- |"]
         for test in result.tests:
             mark = "✅" if test.passed else "❌"
             name = test.title + (" *(hidden)*" if test.hidden else "")
             out.append(f"| {mark} | {_cell(name)} | {_fmt(test.score)} / {_fmt(test.max_score)} | "
-                       f"{_cell('' if test.passed else test.reason)} |")
+                       f"{_cell('' if test.passed else for_students(test.reason))} |")
         out.append("")
         out += _written_markdown(result)
-        out += [f"- {note}" for note in result.notes]
+        out += [f"- {for_students(note)}" for note in result.notes]
         if result.seed is not None and any(t.hidden for t in result.tests):
             out.append(f"- Hidden tests drew their random parameters with seed {result.seed}.")
         out += [f"- {line}" for line in result.late_lines()]
@@ -220,7 +224,7 @@ def _written_html(result):
     e = html.escape
     rows = "".join(f'<tr><td>Question {e(str(w["question"]))}</td><td class="points">{e(_written_points(w))}'
                    f'</td><td>{e(w.get("comment", ""))}</td></tr>' for w in result.written)
-    versions = sorted({w["rubric"] for w in result.written if w.get("rubric")})
+    versions = sorted({for_students(w["rubric"]) for w in result.written if w.get("rubric")})
     return (f'<p class="meta">{e(_written_summary(result))}</p>'
             '<table class="written"><colgroup><col class="test"><col class="points"><col></colgroup>'
             f"<thead><tr><th>written answer</th><th>points</th><th>comment</th></tr></thead><tbody>{rows}"
@@ -257,7 +261,7 @@ def feedback_html(student, results):
         out.append(f'<section class="exercise"><h2>{e(result.exercise)}: {_fmt(result.total)} / '
                    f'{_fmt(result.total_max)}</h2>')
         if result.notebook:
-            out.append(f'<p class="meta">Graded notebook: <code>{e(str(result.notebook))}</code></p>')
+            out.append(f'<p class="meta">Graded notebook: <code>{e(submitted_name(result.notebook))}</code></p>')
         out.append('<table><colgroup><col class="mark"><col class="test"><col class="points"><col></colgroup>'
                    "<thead><tr><th></th><th>test</th><th>points</th><th>what happened</th></tr></thead><tbody>")
         for test in result.tests:
@@ -266,11 +270,11 @@ def feedback_html(student, results):
             out.append(f'<tr class="{status}"><td class="mark">{"✓" if test.passed else "✗"}</td>'
                        f"<td>{e(test.title)}{hidden}</td>"
                        f'<td class="points">{_fmt(test.score)} / {_fmt(test.max_score)}</td>'
-                       f'<td class="reason">{"" if test.passed else e(test.reason)}</td></tr>')
+                       f'<td class="reason">{"" if test.passed else e(for_students(test.reason))}</td></tr>')
             out.append(_figures_row(test))
         out.append("</tbody></table>")
         out.append(_written_html(result))
-        notes = [e(n) for n in result.notes]
+        notes = [e(for_students(n)) for n in result.notes]
         if result.seed is not None and any(t.hidden for t in result.tests):
             notes.append(f"Hidden tests drew their random parameters with seed {e(str(result.seed))}.")
         notes += [e(line) for line in result.late_lines()]
@@ -281,8 +285,8 @@ def feedback_html(student, results):
     return "\n".join(line for line in out if line) + "\n"
 
 
-def write_gradebook(path, rows, exercises):
-    """Write the gradebook CSV: one row per student, one column per exercise, total, max_total.
+def write_gradebook(path, rows, exercises, status=None):
+    """Write the gradebook CSV: one row per student, one column per exercise, total, max_total, status.
 
     An exercise's cell is the record's :attr:`~particles.course.results.records.SubmissionRecord.total`
     (tests, written answers graded by people, minus the late penalty).
@@ -293,20 +297,26 @@ def write_gradebook(path, rows, exercises):
         student -> list of :class:`~particles.course.results.records.SubmissionRecord`, one per exercise.
     exercises : list of str
         Column order. An exercise a student did not submit is left empty.
+    status : dict, optional
+        student -> what their row still waits for (a notebook not graded yet, a run interrupted): a row is
+        never silently partial. A student with a status and no record gets a row of empty cells.
     """
+    status = status or {}
     rows = {student: _records(results) for student, results in rows.items()}
+    rows.update({student: [] for student in status if student not in rows})
     maxima = {}
     for results in rows.values():
         for r in results:
             maxima[r.exercise] = max(maxima.get(r.exercise, 0), r.total_max)
     with open(path, "w", newline="") as handle:
         writer = csv.writer(handle)
-        writer.writerow(["student", *exercises, "total", "max_total"])
+        writer.writerow(["student", *exercises, "total", "max_total", "status"])
         for student in sorted(rows):
             by_exercise = {r.exercise: r.total for r in rows[student]}
             total = sum(by_exercise.values())
             writer.writerow([student, *[_fmt(by_exercise[e]) if e in by_exercise else "" for e in exercises],
-                             _fmt(total), _fmt(sum(maxima.get(e, 0) for e in exercises))])
+                             _fmt(total), _fmt(sum(maxima.get(e, 0) for e in exercises)),
+                             status.get(student, "complete")])
 
 
 def write_json(path, data):
@@ -319,12 +329,13 @@ def write_json(path, data):
 _written = {}  # (folder, hidden_visibility) -> digest of the results its files were last written from
 
 
-def write_outputs(out, done, tests, hidden_visibility, students=None, written=None):
+def write_outputs(out, done, tests, hidden_visibility, students=None, written=None, status=None):
     """A grading run's folder `out`: results.json, feedback.md and feedback.html of `students` (default: all),
     and the gradebook, as far as the records of `done` (``(student, exercise) -> SubmissionRecord``) go.
 
     `written` (a :class:`~particles.course.results.rubric.WrittenGrades`) is merged first into every
-    record, so that a changed rubric rewrites exactly the students whose grades it changes.
+    record, so that a changed rubric rewrites exactly the students whose grades it changes; `status` (student ->
+    text) goes into the gradebook's ``status`` column.
 
     A student's files are rewritten only when their results changed since this
     process last wrote them (the final call of a run then draws no figure again).
@@ -356,4 +367,4 @@ def write_outputs(out, done, tests, hidden_visibility, students=None, written=No
         (folder / "feedback.html").write_text(feedback_html(student, results), encoding="utf-8")
         _written[key] = digest
     exercises = [name for name in tests if any(r.exercise == name for rs in by_student.values() for r in rs)]
-    write_gradebook(out / "gradebook.csv", by_student, exercises)
+    write_gradebook(out / "gradebook.csv", by_student, exercises, status)

@@ -1,4 +1,4 @@
-"""``particles review SUBMISSION... --out DIR``: every student's answer to a written question, side by side.
+r"""``particles review SUBMISSION... --out DIR``: every student's answer to a written question, side by side.
 
 For each exercise and each of its written questions
 (:mod:`particles.course.release.answers`), one self-contained page
@@ -6,9 +6,18 @@ For each exercise and each of its written questions
 (folded), then each student's answer, rendered from Markdown with nothing of
 the student's kept as markup (:mod:`particles.course.results.markup`), with
 the figures of the code cells it refers to, blank answers shown as blank.
-``DIR/index.html`` links them all. The pages load nothing: inline CSS,
-figures as ``data:`` URIs, no script, a Content-Security-Policy that forbids
-anything else.
+``DIR/index.html`` links them all. The pages load nothing from the network:
+inline CSS, figures as ``data:`` URIs, and the equations (``$...$`` and
+``$$...$$`` of the question, the master's answer and the students' answers)
+typeset by the course site's offline MathJax 3, copied into ``DIR/mathjax/``
+(SVG output). The TeX is the students', so MathJax runs safe: its ``html``
+package (``\href``, ``\class``, ``\style``, ``\cssId``), ``\require`` and the menu
+are off, its safe extension allows no URL, class, id or style, and it typesets
+only the math spans :mod:`~particles.course.results.markup` made (a ``$`` in
+prose stays a dollar). Each page's Content-Security-Policy allows scripts only
+from the review folder itself (the two MathJax files: its configuration and
+MathJax), no inline script, nothing else; no markup of the students' reaches
+the page in the first place.
 
 The figures of an answer are the images (PNG, JPEG) that the submitted
 notebook's code cells show between the previous answer, or the last section
@@ -35,9 +44,12 @@ import os
 import tempfile
 from pathlib import Path
 
+from ..grading.deadlines import find_course
 from ..grading.discovery import find_submissions, released_exercise
+from ..term.roster import read_roster
 from ..grading.intake import NotebookRejected, read_notebook
 from ..paths import exercise_tests, project_root
+from ..release.site import copy_mathjax
 from ..release.answers import (answer_cells, answers_of, cell_source, model_answers, question_points, questions_of,
                                is_blank)
 from .markup import markdown_html
@@ -76,14 +88,31 @@ details summary { cursor: pointer; color: #0b57d0; }
 """
 
 
-def _page(title, body):
+MATHJAX_CONFIG = """window.MathJax = {
+  tex: {packages: {'[-]': ['html', 'require', 'autoload', 'noundefined']},
+        inlineMath: [['$', '$']], displayMath: [['$$', '$$']], processEscapes: false},
+  loader: {load: ['ui/safe']},
+  options: {ignoreHtmlClass: 'no-math', processHtmlClass: 'math', enableMenu: false,
+            safeOptions: {allow: {URLs: 'none', classes: 'none', cssIDs: 'none', styles: 'none'}}},
+  svg: {fontCache: 'global'}
+};
+"""
+"""MathJax's configuration for the review pages (``DIR/mathjax/review-config.js``): students' TeX, typeset safely."""
+
+
+def _page(title, body, math=False):
+    """A page; with `math`, MathJax from ``../mathjax/`` typesets its math spans (the only scripts it may run)."""
     e = html.escape
+    scripts = ['<script src="../mathjax/review-config.js"></script>',
+               '<script id="MathJax-script" src="../mathjax/tex-svg-full.js"></script>'] if math else []
+    policy = ("default-src 'none'; img-src data:; style-src 'unsafe-inline'"
+              + ("; script-src 'self'" if math else ""))
     return "\n".join([
         "<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
-        '<meta http-equiv="Content-Security-Policy" content="default-src \'none\'; img-src data:; '
-        'style-src \'unsafe-inline\'">',
+        f'<meta http-equiv="Content-Security-Policy" content="{policy}">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">', f"<title>{e(title)}</title>",
-        f"<style>{_CSS}</style>", "</head>", "<body><main>", *body, "</main></body>", "</html>", ""])
+        f"<style>{_CSS}</style>", *scripts, "</head>", '<body class="no-math"><main>', *body, "</main></body>",
+        "</html>", ""])
 
 
 def _fmt(x):
@@ -197,7 +226,7 @@ def _question_page(exercise, k, count, text, points, model, rows):
                     + (markdown_html(answer) if answer else "<p><em>(blank: no answer written)</em></p>")
                     + _figures_html(figures, student)
                     + (f'<p class="meta">{e(note)}</p>' if note else "") + "</section>")
-    return _page(f"{exercise}, question {k}", body)
+    return _page(f"{exercise}, question {k}", body, math=True)
 
 
 def _write(path, text):
@@ -234,19 +263,24 @@ def _rubric(path, exercise, students, points):
     return stream.getvalue(), sum(1 for row in kept.values() if (row.get("points") or row.get("comment")))
 
 
-def write_review(paths, out, *, root=None, exercise=None):
+def write_review(paths, out, *, root=None, exercise=None, roster=None, name_column="submission_name"):
     """Write the review pages and the rubrics of the written answers of `paths`.
 
     Parameters
     ----------
     paths : sequence of path
-        Notebooks or folders of them, as for ``particles grade``.
+        Notebooks, folders of them or zips (an LMS's download), as for ``particles grade``.
     out : path
         The folder to write: ``index.html``, ``<exercise>/question-<k>.html``, ``<exercise>/rubric.csv``.
     root : path, optional
         The course folder (default: found from the current directory).
     exercise : str, optional
         Read every notebook as this exercise (``particles grade --exercise``).
+    roster : path, optional
+        The roster (default: the course file's ``roster``, if any): the students are named as ``particles grade``
+        names them, their aliases matched (:mod:`particles.course.term.identity`).
+    name_column : str
+        The roster's column of the grader's names (as ``particles export --name-column``).
 
     Returns
     -------
@@ -264,8 +298,17 @@ def write_review(paths, out, *, root=None, exercise=None):
     tests = exercise_tests(root)
     if exercise is not None and exercise not in tests:
         raise ValueError(f"unknown exercise {exercise!r}; expected one of {', '.join(map(repr, tests))}")
-    units, problems = find_submissions(paths, list(tests), exercise)
-    out = Path(out)
+    if roster is None:
+        course = find_course(root, list(tests))
+        roster = course.roster if course is not None else None
+    identity = read_roster(roster, name_column).identity() if roster is not None else None
+    with tempfile.TemporaryDirectory(prefix="particles-review-") as work:  # zips opened as grade opens them
+        return _write_review(paths, Path(out), root, tests, exercise, work, identity)
+
+
+def _write_review(paths, out, root, tests, exercise, work, identity=None):
+    """:func:`write_review` with `work`, the private folder zips are opened into."""
+    units, problems = find_submissions(paths, list(tests), exercise, workdir=work, identity=identity)
     pages, rubrics, index, kept = [], [], [], 0
     for name in [n for n in tests if any(u.exercise == n for u in units)]:
         released = released_exercise(root, name)
@@ -298,6 +341,12 @@ def write_review(paths, out, *, root=None, exercise=None):
         _write(out / name / "rubric.csv", text)
         rubrics.append(out / name / "rubric.csv")
         kept += graded
+    if pages:
+        try:
+            copy_mathjax(out)
+            _write(out / "mathjax" / "review-config.js", MATHJAX_CONFIG)
+        except (ValueError, OSError) as error:  # the pages still show every answer, the TeX as written
+            problems.append(f"equations not typeset: {error}")
     e = html.escape
     body = ["<h1>Written answers to review</h1>",
             '<p class="meta">Grade each question in its exercise\'s <code>rubric.csv</code>, then run '

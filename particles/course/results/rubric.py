@@ -11,10 +11,14 @@ the name ``particles grade`` gives the student (the same discovery,
 question's number, ``max_points`` what the master says it is worth
 (:func:`particles.course.release.answers.question_points`), ``points`` the
 grade (a number in ``[0, max_points]``, empty: not graded yet) and
-``comment`` what the student reads under it. Blank lines are skipped.
+``comment`` what the student reads under it. Blank lines are skipped. A student is
+named by any of their names or aliases (:mod:`particles.course.term.identity`), compared as the grader
+compares names (case and Unicode forms aside).
 
 ``particles grade ... --rubric FILE`` (repeatable; a folder stands for every
-``*.csv`` file under it) checks every row first and refuses the whole run
+``*.csv`` file under it, read per exercise: the rows of the course's exercises
+that the run does not grade are left for the run that grades them, as
+``particles review`` writes one rubric per exercise) checks every row first and refuses the whole run
 (exit status 2, before anything is graded) on: an unknown exercise, student
 or question, points that are not a number or fall outside
 ``[0, max_points]``, a ``max_points`` that disagrees with the master, a row
@@ -40,7 +44,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..grading.discovery import released_exercise
+from ..paths import exercise_tests
 from ..release.answers import question_points
+from ..term.identity import Identity
 
 __all__ = ["COLUMNS", "NO_ANSWER", "RubricError", "Grade", "rubric_files", "exercise_questions",
            "WrittenGrades"]
@@ -139,8 +145,12 @@ def _version(path):
     return f"{path} sha256:{hashlib.sha256(path.read_bytes()).hexdigest()[:16]}"
 
 
-def _read(path, questions, students, seen, problems):
-    """The checked :class:`Grade` s of one file; what is wrong goes to `problems` (``seen``: rows so far)."""
+def _read(path, questions, students, seen, problems, others=()):
+    """The checked :class:`Grade` s of one file; what is wrong goes to `problems` (``seen``: rows so far).
+
+    Rows of the exercises `others` (of the course, not graded in this run) are skipped: a folder of rubrics is
+    read per exercise.
+    """
     try:
         text = path.read_bytes().decode("utf-8-sig")
     except (OSError, UnicodeDecodeError) as error:
@@ -170,17 +180,21 @@ def _read(path, questions, students, seen, problems):
             continue
         cell = {name: value.strip() for name, value in zip(header, row)}
         exercise, student = cell["exercise"], cell["student"]
+        if exercise in others and exercise not in questions:
+            continue
         if exercise not in questions:
             problems.append(f"{where}: unknown exercise {exercise!r}; expected one of "
                             f"{', '.join(sorted(questions)) or '(none graded here)'}")
             continue
         asked = questions[exercise]
-        if student not in students.get(exercise, ()):
-            names = sorted(students.get(exercise, ()))
+        person = students.find(student)
+        if person is None:
+            names = sorted(students.people)
             shown = ", ".join(names[:5]) + (", ..." if len(names) > 5 else "")
-            problems.append(f"{where}: unknown student {student!r}; expected one of the {len(names)} students "
-                            f"whose {exercise} notebooks are graded here ({shown or 'none'})")
+            problems.append(f"{where}: unknown student {student!r}; expected one of {students.describe()} "
+                            f"({shown or 'none'}) or one of their aliases")
             continue
+        student = person.name
         k = cell["question"]
         if not k.isdigit() or int(k) not in asked:
             problems.append(f"{where}: unknown question {k!r} of {exercise}; expected one of "
@@ -228,12 +242,17 @@ class WrittenGrades:
 
     def __init__(self, grades=(), versions=None, questions=None):
         self.grades = {(g.exercise, g.student, g.question): g for g in grades}
-        self.versions = dict(versions or {})
+        if versions is None:  # the rubric files that named each exercise
+            versions = {}
+            for g in grades:
+                if g.rubric not in versions.setdefault(g.exercise, []):
+                    versions[g.exercise].append(g.rubric)
+        self.versions = dict(versions)
         self.questions = dict(questions or {})
 
     @classmethod
-    def load(cls, paths, units, root, exercises=()):
-        """Read and check the rubric files `paths` against the notebooks `units` of a run.
+    def load(cls, paths, units, root, exercises=(), identity=None):
+        """Read and check the rubric files `paths` against the course's students.
 
         Parameters
         ----------
@@ -244,7 +263,11 @@ class WrittenGrades:
         root : path
             The course folder (the masters say what each question is worth).
         exercises : sequence of str
-            More exercises whose questions to know (``--exercise`` when no notebook was found).
+            More exercises whose questions to know (``--exercise`` when no notebook was found, the course's
+            other exercises).
+        identity : particles.course.term.identity.Identity, optional
+            Who is in the course: a row's student is any name or alias of one of its students, written down as
+            their grader name (default: the students of `units`, names compared as the grader compares them).
 
         Raises
         ------
@@ -253,20 +276,19 @@ class WrittenGrades:
         """
         exercises = sorted({u.exercise for u in units} | set(exercises))
         questions = {name: exercise_questions(root, name) for name in exercises}
-        students = {}
-        for unit in units:
-            students.setdefault(unit.exercise, set()).add(unit.student)
-        grades, problems, seen, versions = [], [], {}, {}
+        if identity is None:
+            identity = Identity()
+            for unit in units:
+                identity.admit(unit.student)
+        grades, problems, seen = [], [], {}
+        named = {Path(p).resolve() for p in paths or () if Path(p).is_file()}
+        course = set(exercise_tests(root))  # a folder's rubrics of the course's other exercises: not this run's
         for path in rubric_files(paths or ()):
-            found = _read(path, questions, students, seen, problems)
-            grades += found
-            for g in found:
-                versions.setdefault(g.exercise, [])
-                if g.rubric not in versions[g.exercise]:
-                    versions[g.exercise].append(g.rubric)
+            others = () if path.resolve() in named else course
+            grades += _read(path, questions, identity, seen, problems, others)
         if problems:
             raise RubricError(problems)
-        return cls(grades, versions, questions)
+        return cls(grades, None, questions)
 
     def covers(self, exercise):
         """Whether a rubric names `exercise` (its records are then graded from the rubrics)."""

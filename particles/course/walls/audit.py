@@ -22,7 +22,7 @@ tricks (``Policy.__call__ = ...``, ``WIRES.targets``) no longer switch them
 off. The grader's verdict never depends on them: it is computed in another
 process from the data the worker returns, and the records of a pytest session
 count only when they carry that session's signature (see
-:mod:`particles.course.grading.driver`).
+:mod:`particles.course.grading.session`).
 """
 
 import math

@@ -18,7 +18,8 @@ import sys
 from pathlib import Path
 
 __all__ = ["protect_this_process", "no_new_privs", "landlock_abi", "apply_landlock", "drop_privileges",
-           "drop_capabilities", "become_subreaper", "kill_orphans"]
+           "drop_capabilities", "become_subreaper", "kill_orphans", "die_with_parent",
+           "PARENT_VARIABLE"]
 
 _PR_SET_DUMPABLE, _PR_SET_NO_NEW_PRIVS = 4, 38
 _SYS_CREATE_RULESET, _SYS_ADD_RULE, _SYS_RESTRICT_SELF = 444, 445, 446  # the same on every architecture
@@ -186,6 +187,31 @@ def drop_capabilities():
 
 
 _PR_SET_CHILD_SUBREAPER = 36
+_PR_SET_PDEATHSIG = 1
+
+PARENT_VARIABLE = "PARTICLES_GRADER_PARENT"
+"""Environment variable of a grading session naming the pid of the process that started it
+(:func:`die_with_parent`)."""
+
+
+def die_with_parent(parent):
+    """Have the kernel kill this process (SIGKILL) when its parent ends (Linux); True when set.
+
+    A grading session dies with the process that started it (the driver, or a cluster's worker killed
+    mid-batch), and a worker with its session: no orphan keeps grading. The kernel clears the setting when
+    the process changes its uid, so a worker sets it after that.
+
+    Parameters
+    ----------
+    parent : int
+        The pid the caller knows as its parent: when this process already has another one (the parent
+        ended before the call), it ends now.
+    """
+    if not _prctl(_PR_SET_PDEATHSIG, signal.SIGKILL):
+        return False
+    if os.getppid() != parent:
+        os.kill(os.getpid(), signal.SIGKILL)
+    return True
 
 
 def become_subreaper():

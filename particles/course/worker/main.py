@@ -318,12 +318,13 @@ def _build_walls(config, scratch):
 def main(argv=None):
     """Run the worker: the protocol on stdin/stdout, the student's prints to ``argv[0]``."""
     argv = sys.argv[1:] if argv is None else argv
-    uid = os.environ.pop(UID_VARIABLE, None)
-    if uid is not None:  # first of all: the uid of its own (the grader is root; the scratch folder is the uid's)
-        from ..walls.syscalls import drop_privileges
+    parent, uid = os.getppid(), os.environ.pop(UID_VARIABLE, None)
+    from ..walls.syscalls import die_with_parent, drop_privileges
 
-        if not drop_privileges(int(uid)):
-            return 1
+    # first of all: the uid of its own (the grader is root; the scratch folder is the uid's)
+    if uid is not None and not drop_privileges(int(uid)):
+        return 1
+    die_with_parent(parent)  # no worker outlives its session; after the uid, which clears it
     proto_in, proto_out = os.dup(0), os.dup(1)
     null = os.open(os.devnull, os.O_RDONLY)
     os.dup2(null, 0)

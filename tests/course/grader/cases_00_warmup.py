@@ -40,22 +40,7 @@ def euler_step(f, X, t, h):
                   "test_euler_step_oscillator": "your result matches zeros"},
         "passes": FORCE,
     },
-    # The two public answers hard-coded, a copy of X for every other state: only the hidden test used to
-    # catch it, the test of an unchanged X passed it.
-    "hard_codes_public_steps": {
-        "culprit": "euler_step",
-        "replace": {"euler_step": '''
-def euler_step(f, X, t, h):
-    f(X, t)
-    if X.shape == (2,):
-        return np.array([1.0, 0.1])
-    if X.shape == (1, 2, 1):
-        return np.array([[[1.025], [0.3]]])
-    return X.copy()
-'''},
-        "fails": {UNCHANGED: "your result matches X itself", "test_euler_step_random": "your result matches X itself"},
-        "passes": ["test_euler_step_circle", "test_euler_step_oscillator"] + FORCE,
-    },
+    # (the public answers hard-coded are hard_codes_public_answers of corpus.py, the same notebook: graded once there)
     # Single precision "to save memory": 7 significant digits, far from the reference's 1e-10.
     "euler_in_float32": {
         "culprit": "euler_step",
@@ -183,9 +168,9 @@ def run(f, X0, t0, h, n_steps):
 def euler_step(f, X, t, h):
     return X + h * f(X, t + h)
 '''},
-        "fails": {"test_euler_step_random": "f evaluated at t + h instead of t",
+        "fails": {"test_euler_step_random": "your result matches an Euler step with f evaluated at t + h instead of t",
                   "test_run_random": "`run` calls `euler_step`, which fails its own tests: fix `euler_step` first"},
-        "passes": ["test_euler_step_circle", "test_run_circle"] + FORCE,
+        "passes": ["test_euler_step_circle", "test_euler_step_oscillator", "test_run_circle"] + FORCE,
     },
     # The drag multiplied by the mass along with gravity.
     "drag_times_the_mass": {

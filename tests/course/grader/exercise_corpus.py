@@ -22,9 +22,9 @@ result matches a midpoint step", "your first record is not X0", "did not
 finish within 2 s". A case may add ``"diagnosis": {test: phrase}`` for that
 when its ``fails`` pieces only locate the failure.
 
-A case starts from the master notebook ``solutions/NN_topic.ipynb`` and
-replaces the code cell that defines each named function (``replace``), or
-appends code cells (``append``). The 00_warmup corpus (``corpus.py``) is the
+A case starts from the master notebook ``solutions/NN_topic.ipynb`` without
+its instructor-only cells (as students get it) and replaces the code cell that
+defines each named function (``replace``), or appends code cells (``append``). The 00_warmup corpus (``corpus.py``) is the
 larger one that tests the grader's defences; these test the exercises.
 """
 
@@ -35,6 +35,8 @@ import math
 import os
 import re
 from pathlib import Path
+
+from particles.course.release.notebooks import INSTRUCTOR, INSTRUCTOR_TAG
 
 ROOT = Path(__file__).resolve().parents[3]
 HERE = Path(__file__).resolve().parent
@@ -51,9 +53,20 @@ def _source(cell):
     return "".join(source) if isinstance(source, list) else source
 
 
+def _instructor_only(cell):
+    """Whether a master's cell is dropped from the students' notebooks (release's rule)."""
+    return _source(cell).lstrip().startswith(INSTRUCTOR) or INSTRUCTOR_TAG in cell.get("metadata", {}).get("tags", [])
+
+
 def build(exercise, case):
-    """The notebook (a dict) of `case` for `exercise`, made from its master."""
+    """The notebook (a dict) of `case` for `exercise`, made from its master.
+
+    The master's instructor-only cells are left out, as in what students get: they check the master against the
+    library (and would run their assignments, the library's solvers and the case's own functions, in every
+    worker, a second or more per notebook of some exercises).
+    """
     notebook = json.loads((ROOT / "solutions" / f"{exercise}.ipynb").read_text())
+    notebook["cells"] = [cell for cell in notebook["cells"] if not _instructor_only(cell)]
     for name, code in case.get("replace", {}).items():
         for cell in notebook["cells"]:
             if cell["cell_type"] == "code" and f"def {name}(" in _source(cell):

@@ -51,7 +51,7 @@ def test_every_submission_yields_a_record(graded):
     for name in graded["names"]:
         data = json.loads((graded["out"] / name / "results.json").read_text())
         tests = [t for t in data["tests"] if not t["extra_data"].get("written")]  # + its written question, by hand
-        assert data["max_score"] == 11 and len(tests) == 8 and len(data["tests"]) == 9
+        assert data["extra_data"]["max_score"] == 11 and len(tests) == 8 and len(data["tests"]) == 9
         assert (graded["out"] / name / "feedback.md").read_text().startswith(f"# Feedback for {name}")
         assert all(t["grader_error"] is False for t in _tests(graded, name).values())
 

@@ -100,3 +100,16 @@ def test_a_scatter_with_repeated_indices_is_named():
     blame(records, code)
     assert "`spread` adds into `dx[i]` with += (code cell 2, line 3)" in records[0].reason
     assert "np.add.at" in records[0].reason
+
+
+def test_a_boolean_mask_is_no_scatter_hazard():
+    """x[inside] -= ... with a mask made of comparisons changes each row once: not named; an index array still is."""
+    code = SubmissionCode.from_cells([
+        ("code cell 1", "import numpy as np"),
+        ("code cell 2", "def push(x, H, n, i):\n    inside = H < 0\n    deep = inside & ~(H > -1)\n"
+                        "    x[inside] -= H[inside, None] * n[inside]\n    x[deep] += 1.0\n"
+                        "    x[~inside] += 0.0\n    x[i[inside]] += 1.0\n    return x"),
+    ])
+    from particles.course.grading.blame import scatter_hazards
+
+    assert scatter_hazards(code, "push") == [("code cell 2", 7, "x[i[inside]]")]

@@ -1,14 +1,11 @@
-"""The course file and the late policy: deadlines, grace, caps, extensions, time zones, submission times."""
+"""The course file and the late policy: deadlines, grace, caps, extensions, time zones."""
 
-import json
-import os
 from datetime import datetime, timedelta, timezone
 
 import pytest
 
-from particles.course.grading.deadlines import (Course, LatePolicy, SubmissionTimes, apply_late, decide,
-                                                find_course, load_course, read_times)
-from particles.course.grading.discovery import Unit
+from particles.course.grading.deadlines import (Course, LatePolicy, apply_late, decide, find_course, load_course,
+                                                parse_time)
 from particles.course.results.records import SubmissionRecord, TestRecord
 
 EXERCISES = ["00_warmup", "01_integrator_order"]
@@ -142,6 +139,11 @@ def test_apply_late_uses_the_students_deadline_and_the_records_points(tmp_path):
     ("[exercises.00_warmup]\ndeadline = 2026-10-01T23:59:00Z\n[extensions.alice]\n00_warmup = 2026-10-03T12:00:00",
      r"extensions\.alice\.00_warmup: .* no time zone"),
     ("[exercises.00_warmup\n", r"is not valid TOML"),
+    ('[exercises.00_warmup]\ndeadline = "2026-10-01T23:59 Mars/Olympus"', r"00_warmup\.deadline: unknown time zone "
+                                                                          r"'Mars/Olympus'"),
+    ('[exercises.00_warmup]\ndeadline = "2026-03-29T02:30 Europe/Berlin"', r"does not exist in Europe/Berlin"),
+    ('[exercises.00_warmup]\ndeadline = "2026-10-25T02:30 Europe/Berlin"',
+     r"happens twice in Europe/Berlin .*2026-10-25T02:30:00\+02:00 or 2026-10-25T02:30:00\+01:00"),
 ])
 def test_bad_course_files_are_errors_naming_the_file_and_key(tmp_path, text, message):
     """Every mistake of a course file is a ValueError naming the file and the key at fault."""
@@ -162,50 +164,24 @@ def test_the_course_file_is_found_at_the_root_or_given(tmp_path):
         find_course(tmp_path, EXERCISES, tmp_path / "missing.toml")
 
 
-def test_submission_times_come_from_gradescope_then_the_times_file_then_the_file(tmp_path):
-    """Gradescope's created_at wins over a times file, which wins over the notebook's modification time."""
-    notebook = tmp_path / "alice.ipynb"
-    notebook.write_text("{}")
-    os.utime(notebook, (1e9, 1e9))
-    unit = Unit("alice", "00_warmup", notebook)
-    assert SubmissionTimes().of(unit) == (datetime.fromtimestamp(1e9, timezone.utc),
-                                          "the notebook file's modification time")
-    times = tmp_path / "times.csv"
-    times.write_text("student,exercise,submitted,comment\nalice,00_warmup,2026-10-02T10:00:00+02:00,x\n"
-                     "bob,,2026-10-03T10:00:00Z,\n")
-    assert SubmissionTimes(times=times).of(unit) == (datetime(2026, 10, 2, 8, tzinfo=timezone.utc), "the times file")
-    bob = Unit("bob", "01_integrator_order", notebook)  # an empty exercise cell: every exercise
-    assert SubmissionTimes(times=times).of(bob)[0] == datetime(2026, 10, 3, 10, tzinfo=timezone.utc)
-    metadata = tmp_path / "submission_metadata.json"
-    metadata.write_text(json.dumps({"id": 1, "created_at": "2026-10-02T14:22:32.365935-07:00",
-                                    "users": [{"email": "alice@example.com", "id": 1234, "name": "A"}]}))
-    source = SubmissionTimes(metadata=metadata, times=times)
-    assert source.of(unit) == (datetime(2026, 10, 2, 21, 22, 32, 365935, tzinfo=timezone.utc),
-                               "Gradescope's submission metadata")
-    assert source.aliases() == ("alice@example.com", "1234")
+def test_named_zones_follow_daylight_saving():
+    """A deadline in Europe/Berlin is CEST in July and CET in November, in both spellings; an offset still works."""
+    summer = parse_time("2026-07-01T23:59 Europe/Berlin", "deadline")
+    winter = parse_time("2026-11-01T23:59:00[Europe/Berlin]", "deadline")
+    assert (summer.utcoffset(), winter.utcoffset()) == (timedelta(hours=2), timedelta(hours=1))
+    assert parse_time("2026-07-01T23:59:00+02:00", "deadline") == summer
+    due = parse_time("2026-10-29T23:59 Europe/Berlin", "deadline")  # after the clocks went back (Oct 25)
+    assert decide(due + timedelta(hours=2), due, LatePolicy(0.1, 0.5), 10)["reason"].endswith("cap 50%)")
+    assert "2026-10-29 23:59 +01:00" in decide(due, due, LatePolicy(0.1, 0.5), 10)["reason"]
 
 
-@pytest.mark.parametrize("text, message", [
-    ("student,when\nalice,2026-10-02T10:00:00Z\n", "no column exercise, submitted"),
-    ("student,exercise,submitted\nalice,00_warmup,2026-10-02 10:00\n", r"line 2, submitted: .* no time zone"),
-    ("student,exercise,submitted\nalice,00_warmup,yesterday\n", r"line 2, submitted: 'yesterday' is not ISO 8601"),
-    ("student,exercise,submitted\nalice,00_warmup,2026-10-02T10:00Z\nalice,00_warmup,2026-10-02T11:00Z\n",
-     "line 3: alice 00_warmup is given twice"),
-    ("student,exercise,submitted\n,00_warmup,2026-10-02T10:00Z\n", "line 2: no student"),
-])
-def test_bad_times_files_name_the_line(tmp_path, text, message):
-    """A times file without a column, with a time without a zone or a duplicate is an error naming the line."""
-    path = tmp_path / "times.csv"
-    path.write_text(text)
-    with pytest.raises(ValueError, match=message.replace("not ISO", "not an ISO")):
-        read_times(path)
-
-
-def test_bad_gradescope_metadata_is_an_error(tmp_path):
-    """Metadata that is not JSON, or has no created_at, or one without a zone, is an error naming the file."""
-    path = tmp_path / "submission_metadata.json"
-    for text, message in (("nope", "cannot read Gradescope's submission metadata"), ("{}", "has no created_at"),
-                          ('{"created_at": "2026-10-02T10:00:00"}', "created_at: .* no time zone")):
-        path.write_text(text)
-        with pytest.raises(ValueError, match=message):
-            SubmissionTimes(metadata=path)
+def test_every_error_of_a_course_file_at_once(tmp_path):
+    """A course file with four mistakes is refused once, naming each key: none is left for the next run."""
+    text = ("[late]\ncap = 2\npenalty_per_day = -1\n[exercises.00_warmup]\ndeadline = 2026-10-01T23:59:00\n"
+            "[exercises.99_x]\ndeadline = 2026-10-01T23:59:00Z\n")
+    with pytest.raises(ValueError) as caught:
+        _course(tmp_path, text)
+    message = str(caught.value)
+    assert "4 problems:" in message and str(tmp_path / "course.toml") in message
+    for key in ("late.cap:", "late.penalty_per_day:", "exercises.00_warmup.deadline:", "exercises.99_x:"):
+        assert f"\n  {key}" in message, key

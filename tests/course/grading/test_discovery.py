@@ -50,7 +50,8 @@ def test_two_places_mapping_to_one_student_are_a_conflict_naming_both(tmp_path, 
     assert len(units) == 1
     unit = next(iter(units.values()))
     assert unit.student.casefold() == "alice" and unit.exercise == "00_warmup"
-    assert str(a) in unit.rejected and str(b) in unit.rejected and "none was graded" in unit.rejected
+    assert first in unit.rejected and second in unit.rejected and "none was graded" in unit.rejected
+    assert str(tmp_path) not in unit.rejected  # the student reads it: the names they handed in, not our folders
     assert any(str(a) in p and str(b) in p for p in problems)
 
 
@@ -58,7 +59,8 @@ def test_two_folders_given_with_one_student_are_a_conflict(tmp_path):
     """The same student in two folders given on the command line is a conflict, not an overwrite."""
     a, b = put(tmp_path / "one" / "bob" / "00_warmup.ipynb"), put(tmp_path / "two" / "Bob" / "x_00_warmup.ipynb")
     units, _ = found([tmp_path / "one", tmp_path / "two"])
-    assert list(units) == ["Bob"] and str(a) in units["Bob"].rejected and str(b) in units["Bob"].rejected
+    assert list(units) == ["Bob"] and units["Bob"].origin == f"{a} and {b}"
+    assert "(bob/00_warmup.ipynb and Bob/x_00_warmup.ipynb)" in units["Bob"].rejected
 
 
 def test_one_students_own_folder_keeps_the_exact_name_else_the_newest(tmp_path):
@@ -187,9 +189,13 @@ def test_an_lms_export_zip_names_its_students(tmp_path):
     assert sorted(units) == ["43", "Ann_Lee_555", "bo@example.com", "doea", "pat", "smithj", "submission_79"]
     assert units["smithj"].origin == f"{canvas}:smithj_late_101_202_00_warmup.ipynb"
     assert units["smithj"].notebook.is_relative_to(work) and units["smithj"].notebook.is_file()
-    assert units["doea"].origin.endswith(":doea_103_204_00_warmup.ipynb") and not units["doea"].rejected
-    assert problems == [f"{canvas}:doea_103_204_00_warmup-1.ipynb: doea has several notebooks for 00_warmup; "
-                        f"graded {canvas}:doea_103_204_00_warmup.ipynb"]
+    assert units["smithj"].late_flag and units["smithj"].aliases == (("canvas_id", "101"), ("login", "smithj"))
+    # Canvas's re-upload of one file name is "-1": the latest upload is graded, and the report says so
+    assert units["doea"].origin.endswith(":doea_103_204_00_warmup-1.ipynb") and not units["doea"].rejected
+    assert problems == [f"{canvas}:doea_103_204_00_warmup.ipynb: doea has several notebooks for 00_warmup; "
+                        f"graded the latest upload, {canvas}:doea_103_204_00_warmup-1.ipynb"]
+    assert units["bo@example.com"].aliases == (("email", "bo@example.com"), ("sid", "42"))
+    assert units["bo@example.com"].submitted is None  # a date without a time is no submission time
 
 
 def test_a_refused_zip_is_a_problem_and_a_zip_needs_a_workdir(tmp_path):
@@ -211,8 +217,8 @@ def test_a_zip_and_a_folder_of_one_student_are_a_conflict(tmp_path):
     lms = make_zip(tmp_path / "lms.zip", {"rita/00_warmup.ipynb": notebook()})
     loose = put(tmp_path / "subs" / "Rita.ipynb")
     units, _ = found([lms, tmp_path / "subs"], workdir=work)
-    assert list(units) == ["Rita"] and f"{lms}:rita/00_warmup.ipynb" in units["Rita"].rejected
-    assert str(loose) in units["Rita"].rejected
+    assert list(units) == ["Rita"] and units["Rita"].origin == f"{lms}:rita/00_warmup.ipynb and {loose}"
+    assert "(rita/00_warmup.ipynb and Rita.ipynb)" in units["Rita"].rejected
 
 
 def test_a_missing_path_is_a_problem(tmp_path):
@@ -253,3 +259,61 @@ def test_names_written_composed_and_decomposed_are_one_student(tmp_path):
     put(tmp_path / "jos\u00e9.ipynb")
     units, _ = found([tmp_path])
     assert list(units) == ["Jos\u00e9"] and "none was graded" in units["Jos\u00e9"].rejected
+
+
+# -- who is who: Canvas's user ids, Gradescope's groups and times, the roster's aliases ------------------------
+
+
+def test_two_canvas_students_with_one_login_stay_two_and_each_gets_their_latest_upload(tmp_path):
+    """Canvas's user id, not its login, says whose a file is; of one user's files the largest attachment id wins."""
+    work = tmp_path / "work"
+    work.mkdir(mode=0o700)
+    canvas = make_zip(tmp_path / "canvas.zip", {"smithjohn_2000_5001_00_warmup.ipynb": notebook(),
+                                                "smithjohn_2001_5002_00_warmup.ipynb": notebook(),
+                                                "smithjohn_2001_5007_00_warmup.ipynb": notebook()})
+    units, problems = found([canvas], workdir=work)
+    assert sorted(units) == ["smithjohn", "smithjohn_2001"] and not any(u.rejected for u in units.values())
+    assert units["smithjohn_2001"].origin.endswith("smithjohn_2001_5007_00_warmup.ipynb")
+    assert problems == [f"{canvas}:smithjohn_2001_5002_00_warmup.ipynb: smithjohn_2001 has several notebooks for "
+                        f"00_warmup; graded the latest upload, {canvas}:smithjohn_2001_5007_00_warmup.ipynb"]
+
+
+def test_a_gradescope_group_is_graded_once_per_member_at_its_created_at(tmp_path):
+    """Every submitter of a Gradescope submission gets the notebook, with the submission's created_at."""
+    from datetime import datetime, timedelta, timezone
+
+    work = tmp_path / "work"
+    work.mkdir(mode=0o700)
+    export = make_zip(tmp_path / "gs.zip", {
+        "export/submission_metadata.yml": "submission_5:\n  :submitters:\n  - :name: A\n    :email: a@uni.edu\n"
+        "  - :name: B\n    :sid: '77'\n    :email: b@uni.edu\n  :created_at: 2026-10-02 10:00:00.5 -07:00\n",
+        "export/submission_5/00_warmup.ipynb": notebook(), "export/submission_6/00_warmup.ipynb": notebook()})
+    units, problems = found([export], workdir=work)
+    assert sorted(units) == ["a@uni.edu", "b@uni.edu", "submission_6"] and problems == []
+    when = datetime(2026, 10, 2, 10, 0, 0, 500000, tzinfo=timezone(timedelta(hours=-7)))
+    assert units["a@uni.edu"].submitted == units["b@uni.edu"].submitted == when
+    assert units["b@uni.edu"].aliases == (("email", "b@uni.edu"), ("sid", "77"))
+    assert units["submission_6"].submitted is None
+
+
+def test_the_roster_joins_one_students_names_from_two_lms_and_names_strangers(tmp_path):
+    """With a roster, Canvas's login and Gradescope's e-mail of one student are that student; a name that is no
+    roster student's is graded under its own name and reported."""
+    from particles.course.term.identity import Identity, Person
+
+    work = tmp_path / "work"
+    work.mkdir(mode=0o700)
+    course = Identity([Person("alice", [("login", "alicesmith"), ("email", "alice@uni.edu")]),
+                       Person("bob", [("canvas_id", "12")])], closed=True)
+    canvas = make_zip(tmp_path / "canvas.zip", {"alicesmith_10_20_00_warmup.ipynb": notebook(),
+                                                "someone_12_21_00_warmup.ipynb": notebook(),
+                                                "zed_13_22_00_warmup.ipynb": notebook()})
+    gradescope = make_zip(tmp_path / "gs.zip", {
+        "x/submission_metadata.yml": "submission_1:\n  :submitters:\n  - :email: Alice@Uni.edu\n",
+        "x/submission_1/01_integrator_order.ipynb": notebook("01_integrator_order")})
+    units, problems = find_submissions([canvas, gradescope], EXERCISES, workdir=work, identity=course)
+    assert sorted((u.student, u.exercise) for u in units) == [("alice", "00_warmup"), ("alice", "01_integrator_order"),
+                                                              ("bob", "00_warmup"), ("zed", "00_warmup")]
+    assert [u.on_roster for u in units if u.student == "zed"] == [False]
+    assert problems == [f"{canvas}:zed_13_22_00_warmup.ipynb: 'zed' is no student of the roster (nor an alias of "
+                        "one): graded as zed; add the name to their roster line's aliases"]

@@ -1,4 +1,4 @@
-"""The grading driver keeps its records: written as they are made, resumed, the same alone and in a batch."""
+"""The grading driver keeps its records: written as they are made, resumed, kept by a killed driver, late work."""
 
 import json
 import os
@@ -14,33 +14,10 @@ sys.path.insert(0, str(Path(__file__).parent.parent / "grader"))
 import corpus  # noqa: E402
 
 from particles.course.walls import isolation  # noqa: E402
-from particles.course.grading.discovery import Unit  # noqa: E402
-from particles.course.grading.driver import LibraryChanged, _batches, grade, grade_batch  # noqa: E402
+from particles.course.grading.driver import LibraryChanged, grade  # noqa: E402
+from particles.course.term.database import TermRecord  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[3]
-
-HOSTILE = '''
-import os, signal, glob
-
-def euler_step(f, X, t, h):
-    """A correct step that first tries every way out it knows (each refused), then answers."""
-    for attempt in (lambda: os.kill(-1, signal.SIGKILL), lambda: os.kill(os.getppid(), signal.SIGKILL),
-                    lambda: [open(p).read() for p in glob.glob("/tmp/particles-grade-*/grader/*.json")],
-                    lambda: open(os.path.expanduser("~/../records.json"), "w").write("{}")):
-        try:
-            attempt()
-        except BaseException:
-            pass
-    return X + h * f(X, t)
-'''
-
-KILLER = '''
-import os
-
-def total_force(x, v, m, g, d):
-    """Ends its own worker."""
-    os._exit(3)
-'''
 
 
 def _write(folder, name, notebook):
@@ -48,58 +25,29 @@ def _write(folder, name, notebook):
     (folder / f"{name}_00_warmup.ipynb").write_text(json.dumps(notebook) if isinstance(notebook, dict) else notebook)
 
 
-def test_honest_grade_is_the_same_alone_and_beside_hostile_ones(tmp_path):
-    """The master's verdicts in one batch with two hostile notebooks equal its verdicts alone."""
-    subs = tmp_path / "subs"
-    _write(subs, "honest", corpus.MASTER.read_text())
-    _write(subs, "hostile", corpus.build({"replace": {"euler_step": HOSTILE}}))
-    _write(subs, "killer", corpus.build({"replace": {"total_force": KILLER}}))
-    units = [Unit(name, "00_warmup", subs / f"{name}_00_warmup.ipynb") for name in ("hostile", "honest", "killer")]
-    together = grade_batch(units, ROOT, seeds=[7, 7, 7], time_limit=5.0)
-    alone = grade_batch([units[1]], ROOT, seeds=[7], time_limit=5.0)[0]
-    verdicts = {t["test"]: (t["passed"], t["reason"]) for t in alone["tests"]}
-    assert all(passed for passed, _ in verdicts.values()), verdicts
-    assert {t["test"]: (t["passed"], t["reason"]) for t in together[1]["tests"]} == verdicts
-    assert all(r["complete"] for r in together)
-    hostile = {t["test"]: t for t in together[0]["tests"]}
-    assert hostile["test_euler_step_circle"]["passed"]  # its attempts all failed, and it answered
-    killer = {t["test"]: t for t in together[2]["tests"]}
-    assert not killer["test_total_force_three_particles"]["passed"]
-    assert "exit status 3" in killer["test_total_force_three_particles"]["reason"]
-    assert together[1]["isolation"]["audit_hook"] is True and together[1]["sandbox"]
-
-
-def test_each_notebook_of_a_batch_keeps_one_worker_through_tests_with_parameters(tmp_path):
-    """A batch runs each notebook's tests together: one worker per notebook, even where tests have parameters.
-
-    ``test_provot_pass_one_spring`` of exercise 03 has parameters of its own; pytest's ordering alone
-    made the notebooks take turns there, and every turn started a new worker and loaded the notebook
-    again.
-    """
-    master = ROOT / "solutions" / "03_provot.ipynb"
-    units = []
-    for name in ("ada", "bo"):
-        (tmp_path / f"{name}.ipynb").write_bytes(master.read_bytes())
-        units.append(Unit(name, "03_provot", tmp_path / f"{name}.ipynb"))
-    records = grade_batch(units, ROOT, seeds=[5, 5])
-    assert not [note for r in records for note in r["notes"] if "restarted" in note]
-    assert all(r.complete and r.score == r.max_score for r in records), [r.score for r in records]
-    parametrized = [t["test"] for t in records[1]["tests"] if t["test"].startswith("test_provot_pass_one_spring[")]
-    assert len(parametrized) == 4, parametrized
+def _current(out):
+    """student -> current record (of 00_warmup) in the course record of `out`."""
+    term = TermRecord(out)
+    try:
+        return {student: record for (student, _), record in term.current().items()}
+    finally:
+        term.close()
 
 
 def test_records_are_written_as_they_are_made_and_resumed(tmp_path):
-    """Each notebook's record is on disk after its batch; --resume keeps unchanged ones and grades the rest."""
+    """Each notebook's record is in the course record after its batch; --resume keeps unchanged ones and grades the
+    rest (a changed notebook, a result retired)."""
     subs, out = tmp_path / "subs", tmp_path / "out"
     for k in range(3):
         _write(subs, f"s{k}", corpus.MASTER.read_text())
     first = grade([subs], out, seed=11, root=ROOT)
-    records = sorted(p.name for p in (out / "records").glob("*.json"))
-    assert records == [f"s{k}_00_warmup__00_warmup.json" for k in range(3)]
+    assert sorted(_current(out)) == [f"s{k}_00_warmup" for k in range(3)]
     assert first["resumed"] == 0
-    # one notebook changes, one record is lost (a run stopped before it): both are graded again
+    # one notebook changes, one result is retired: both are graded again
     _write(subs, "s1", corpus.STUB.read_text())
-    (out / "records" / "s2_00_warmup__00_warmup.json").unlink()
+    term = TermRecord(out)
+    term.retire("s2_00_warmup", "00_warmup", "graded with the wrong tests", "the instructor")
+    term.close()
     again = grade([subs], out, seed=11, root=ROOT, resume=True)
     assert again["resumed"] == 1
     scores = {s: sum(t["points"] for t in r[0]["tests"] if t["passed"]) for s, r in again["students"].items()}
@@ -112,7 +60,8 @@ def test_records_are_written_as_they_are_made_and_resumed(tmp_path):
 
 
 def test_a_killed_driver_keeps_its_records(tmp_path):
-    """A `particles grade` killed mid-run leaves the finished records; --resume grades only the rest."""
+    """A `particles grade` killed mid-run leaves the finished records and its run marked interrupted by the next;
+    --resume grades only the rest."""
     subs, out = tmp_path / "subs", tmp_path / "out"
     for k in range(6):
         _write(subs, f"s{k}", corpus.MASTER.read_text())
@@ -121,35 +70,24 @@ def test_a_killed_driver_keeps_its_records(tmp_path):
     driver = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                               start_new_session=True)
     deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and len(list((out / "records").glob("*.json"))) < 2:
-        time.sleep(0.05)
+    while time.monotonic() < deadline and (not (out / "course.sqlite").exists() or len(_current(out)) < 2):
+        time.sleep(0.1)
     os.killpg(driver.pid, signal.SIGKILL)
     driver.wait()
-    kept = len(list((out / "records").glob("*.json")))
+    kept = len(_current(out))
     assert 2 <= kept
+    book = out / "gradebook.csv"  # a partial gradebook says so (when the run got to write one)
+    assert not book.exists() or "not graded yet" in book.read_text() or kept == 6
     done = subprocess.run(command + ["--resume"], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert f"resumed: {kept} record(s)" in done.stdout or kept == 6
-    assert len(list((out / "records").glob("*.json"))) == 6
+    assert len(_current(out)) == 6
     assert "sandbox: " in done.stdout
-
-
-def test_a_record_cut_off_before_its_rename_is_no_record(tmp_path, monkeypatch):
-    """Killed between writing and renaming: the folder holds no ``*.json`` but the finished ones, nothing to load."""
-    from particles.course.results.records import SubmissionRecord
-    from particles.course.results.store import RecordStore
-
-    subs, out = tmp_path / "subs", tmp_path / "out"
-    _write(subs, "s0", corpus.MASTER.read_text())
-    grade([subs], out, seed=3, root=ROOT)
-    store = RecordStore(out / "records", {"other": "options"})
-    (record,) = [json.loads(p.read_text()) for p in (out / "records").glob("*.json")]
-    monkeypatch.setattr(os, "replace", lambda *args: None)  # the rename never happens
-    store.path("s0_00_warmup", "00_warmup").unlink()
-    record.pop("options")
-    store.save(SubmissionRecord.from_dict(record))
-    assert list((out / "records").glob("*.json")) == []
-    assert len(list((out / "records").glob(".record-*"))) == 1
+    term = TermRecord(out)
+    assert [status for (status,) in term.db.execute("SELECT status FROM runs ORDER BY id")] == ["interrupted",
+                                                                                                "complete"]
+    term.close()
+    assert "not graded yet" not in (out / "gradebook.csv").read_text()
 
 
 def test_a_changed_library_fails_the_run_loudly(tmp_path, monkeypatch):
@@ -176,15 +114,16 @@ deadline = 2026-10-01T23:59:00+01:00
 """
 
 
-def _late_course(tmp_path):
-    """alice and bob submit the master; alice has a 3-day extension, bob is 10 hours late."""
+def _late_course(tmp_path, others=()):
+    """alice and bob submit the master; alice has a 3-day extension, bob is 10 hours late; `others` are on time."""
     subs = tmp_path / "subs"
-    for student in ("alice", "bob"):
+    for student in ("alice", "bob", *others):
         (subs / student).mkdir(parents=True)
         (subs / student / "00_warmup.ipynb").write_text(corpus.MASTER.read_text())
     (tmp_path / "course.toml").write_text(COURSE)
     (tmp_path / "times.csv").write_text("student,exercise,submitted\nalice,00_warmup,2026-10-03T10:00:00+01:00\n"
-                                        "bob,00_warmup,2026-10-02T09:59:00+01:00\n")
+                                        "bob,00_warmup,2026-10-02T09:59:00+01:00\n"
+                                        + "".join(f"{o},00_warmup,2026-10-01T09:00:00+01:00\n" for o in others))
     return subs, {"course": tmp_path / "course.toml", "times": tmp_path / "times.csv", "seed": 5, "root": ROOT}
 
 
@@ -195,7 +134,7 @@ def test_late_work_is_penalized_and_one_student_is_regraded_alone(tmp_path):
     subs, options = _late_course(tmp_path)
     out = tmp_path / "out"
     grade([subs], out, **options)
-    records = {p.name.split("__")[0]: json.loads(p.read_text()) for p in (out / "records").glob("*.json")}
+    records = {student: record.to_dict() for student, record in _current(out).items()}
     assert records["alice"]["late"]["penalty"] == 0 and "(extension of 3 day(s) for alice)" in \
         records["alice"]["late"]["reason"]
     bob = records["bob"]["late"]
@@ -212,7 +151,8 @@ def test_late_work_is_penalized_and_one_student_is_regraded_alone(tmp_path):
     assert "Graded by tests version" in (out / "bob" / "feedback.html").read_text()
     results = json.loads((out / "bob" / "results.json").read_text())
     assert results["score"] == 9.9 and results["extra_data"]["late"]["00_warmup"]["penalty"] == 1.1
-    assert "Late: raw score 11" in results["output"]
+    assert "Late: submitted 10 hours after the deadline" in results["output"]  # no points: hidden tests hidden
+    assert "raw score" not in results["output"]
 
     # bad uses of --student, refused before anything is graded
     with pytest.raises(ValueError, match="unknown student 'carol'.*the students are alice, bob"):
@@ -224,10 +164,10 @@ def test_late_work_is_penalized_and_one_student_is_regraded_alone(tmp_path):
 
     # alice hands in the stub instead: only she is graded again
     (subs / "alice" / "00_warmup.ipynb").write_text(corpus.STUB.read_text())
-    bob_bytes = (out / "records" / "bob__00_warmup.json").read_bytes()
+    bob_before = _current(out)["bob"].to_dict()
     again = grade([subs], out, students=["alice"], **options)
     assert list(again["students"]) == ["alice"] and again["students"]["alice"][0].score == 0
-    assert (out / "records" / "bob__00_warmup.json").read_bytes() == bob_bytes
+    assert _current(out)["bob"].to_dict() == bob_before
     gradebook = (out / "gradebook.csv").read_text()
     assert "alice,0,0,11" in gradebook and "bob,9.9,9.9,11" in gradebook
     assert "**Total: 0 / 11 points**" in (out / "alice" / "feedback.md").read_text()
@@ -236,13 +176,13 @@ def test_late_work_is_penalized_and_one_student_is_regraded_alone(tmp_path):
     options["course"].write_text(COURSE + "\n[extensions.bob]\n00_warmup = 1\n")
     resumed = grade([subs], out, resume=True, **options)
     assert resumed["resumed"] == 2 and resumed["students"]["bob"][0].penalty == 0
-    assert json.loads((out / "records" / "bob__00_warmup.json").read_text())["late"]["days_late"] == 0
+    assert _current(out)["bob"].late["days_late"] == 0
     assert "bob,11,11,11" in (out / "gradebook.csv").read_text()
 
 
 def test_resume_grades_again_the_records_of_a_changed_test(tmp_path, monkeypatch):
     """--resume keeps a record only when its tests version is the current one of its exercise."""
-    from particles.course.grading import driver
+    from particles.course.grading import driver, session
     from particles.course.grading.discovery import notebook_digest
     from particles.course.results.records import SubmissionRecord, TestRecord
 
@@ -256,7 +196,7 @@ def test_resume_grades_again_the_records_of_a_changed_test(tmp_path, monkeypatch
                                  tests=[TestRecord(test="t", name="t", points=11, passed=True)],
                                  tests_version=driver.tests_version(root, u.exercise)) for u in units]
 
-    monkeypatch.setattr(driver, "grade_batch", fake_batch)
+    monkeypatch.setattr(session, "grade_batch", fake_batch)
     out = tmp_path / "out"
     grade([subs], out, **options)
     assert sorted(graded) == ["alice", "bob"]
@@ -265,50 +205,126 @@ def test_resume_grades_again_the_records_of_a_changed_test(tmp_path, monkeypatch
     real = driver.tests_version
     monkeypatch.setattr(driver, "tests_version", lambda root, exercise, library=None: real(root, exercise, "new"))
     assert grade([subs], out, resume=True, **options)["resumed"] == 0 and sorted(graded) == ["alice", "bob"]
-    record = json.loads((out / "records" / "alice__00_warmup.json").read_text())
-    assert record["tests_version"].endswith(" library=new")
+    assert _current(out)["alice"].tests_version.endswith(" library=new")
 
 
-@pytest.mark.parametrize("jobs", [1, 2, 4])
-@pytest.mark.parametrize("sizes", [[15, 20, 17, 17, 14, 12], [17], [300], [1], [2, 1, 3], [21], [41, 3]])
-def test_batches_cover_every_notebook_once_large_first_one_exercise_each(sizes, jobs):
-    """Batches keep the notebooks' order, one exercise each, at most 20; none of one beside a larger one of its
-    exercise; one exercise's batches never grow; and a run of many notebooks over several exercises takes
-    fewer sessions than six per exercise (each session costs about 1 s to start)."""
-    units = [Unit(f"s{e}_{k}", f"{e:02d}_topic", Path(f"s{e}_{k}.ipynb"))
-             for e, n in enumerate(sizes) for k in range(n)]
-    batches = _batches(units, jobs)
-    assert [u for b in batches for u in b] == units
-    assert all(0 < len(b) <= 20 and len({u.exercise for u in b}) == 1 for b in batches)
-    for exercise in {u.exercise for u in units}:
-        mine = [len(b) for b in batches if b[0].exercise == exercise]
-        assert mine == [1] or 1 not in mine, mine
-    if len(sizes) == 1:  # one exercise: sizes never grow, so the run ends on small batches
-        assert all(a >= b for a, b in zip(map(len, batches), map(len, batches[1:])))
-    if len(units) >= 60:
-        assert len(batches) >= 2 * jobs
-    if len(sizes) > 1 and len(units) >= 60:
-        assert len(batches) < 6 * len(sizes)
+class MemoryRunner:
+    """A run stage that grades nothing: each notebook passes one test of 11 points. Batches holding a notebook
+    named in `lose` come back lost (a machine that died with them), every time they are submitted."""
+
+    def __init__(self, lose=()):
+        self.lose, self.queue, self.submitted, self.closed = set(lose), [], [], None
+
+    def submit(self, batch, settings):
+        self.submitted.append([u.student for u in batch.units])
+        self.queue.append(batch)
+
+    def completed(self):
+        from particles.course.grading.run import Outcome
+        from particles.course.results.records import SubmissionRecord, TestRecord
+
+        while self.queue:
+            batch = self.queue.pop(0)
+            if self.lose & {u.student for u in batch.units}:
+                yield Outcome(batch, lost="the worker machine went away")
+                continue
+            yield Outcome(batch, results=[
+                SubmissionRecord(student=u.student, exercise=u.exercise, notebook=u.where, seed=seed, complete=True,
+                                 grader_status=0, tests=[TestRecord(test="t", name="t", points=11, passed=True)])
+                for u, seed in zip(batch.units, batch.seeds)])
+
+    def close(self, cancel=False):
+        self.closed = "cancelled" if cancel else "done"
 
 
-def test_plugins_installed_beside_pytest_do_not_join_the_grading_sessions(tmp_path, monkeypatch):
-    """A pytest plugin installed in the grader's environment (here one that fails every session it joins, found
-    through its distribution's ``pytest11`` entry point, as pytest-randomly would be) is not loaded by the
-    grading sessions: the master still gets full marks."""
-    site = tmp_path / "site"
-    (site / "evil_plugin-1.0.dist-info").mkdir(parents=True)
-    (site / "evil_plugin-1.0.dist-info" / "METADATA").write_text("Metadata-Version: 2.1\nName: evil-plugin\nVersion: 1.0\n")
-    (site / "evil_plugin-1.0.dist-info" / "entry_points.txt").write_text("[pytest11]\nevil = evil_plugin\n")
-    (site / "evil_plugin.py").write_text(
-        "import pathlib\n"
-        f"def pytest_configure(config):\n    pathlib.Path({str(tmp_path / 'joined')!r}).write_text('x')\n"
-        "def pytest_collection_modifyitems(items):\n    items.reverse()\n    raise SystemExit(4)\n")
-    monkeypatch.setenv("PYTHONPATH", str(site))
-    probe = subprocess.run([sys.executable, "-m", "pytest", "--co", "-q", "-p", "no:cacheprovider", str(tmp_path)],
-                           capture_output=True, text=True, cwd=tmp_path)
-    assert (tmp_path / "joined").exists(), probe.stdout + probe.stderr  # an ordinary pytest loads it
-    (tmp_path / "joined").unlink()
-    _write(tmp_path / "subs", "honest", corpus.MASTER.read_text())
-    (record,) = grade_batch([Unit("honest", "00_warmup", tmp_path / "subs" / "honest_00_warmup.ipynb")], ROOT, seeds=[7])
-    assert record["complete"] and all(t["passed"] for t in record["tests"]), record["tests"]
-    assert not (tmp_path / "joined").exists()
+class MemoryRecorder:
+    """A record stage in a dict, implementing the recorder protocol with nothing on disk."""
+
+    def __init__(self):
+        self.records, self.saved, self.marks, self.times = {}, [], [], {}
+
+    def kept(self, unit, version):
+        return None
+
+    def save(self, record):
+        self.records[(record.student, record.exercise)] = record
+        self.saved.append(record.student)
+
+    def update(self, record):
+        self.records[(record.student, record.exercise)] = record
+
+    def current(self):
+        return dict(self.records)
+
+    def start(self, units, times):
+        self.marks.append(("start", len(units)))
+        self.times = {u.student: times(u) for u in units}
+
+    def finish(self, complete=True):
+        self.marks.append(("finish", complete))
+
+    def pending(self):
+        return []
+
+    def keep_written(self, written):
+        return written
+
+    def keep_course(self, course):
+        self.marks.append(("course", sorted(course.extensions)))
+
+
+def test_a_whole_run_through_memory_run_and_record_stages(tmp_path):
+    """grade() with the run and record stages swapped for in-memory fakes: every notebook gets one current record,
+    late decisions are made, a lost batch is sent again, then notebook by notebook, and a notebook lost every time
+    gets an incomplete record saying why (never a silent 0); the run is marked started and finished."""
+    subs, options = _late_course(tmp_path, others=("carl", "dana", "eve", "malformed"))
+    (subs / "malformed" / "00_warmup.ipynb").write_text('{"cells": [')
+    runner, recorder, seen = MemoryRunner(lose={"dana"}), MemoryRecorder(), []
+    summary = grade([subs], None, runner=runner, recorder=recorder, progress=seen.append, jobs=1, **options)
+    assert sorted(s for s, _ in recorder.records) == ["alice", "bob", "carl", "dana", "eve", "malformed"]
+    assert sorted(r.student for r in seen) == sorted(recorder.saved) == sorted(summary["students"])
+    assert recorder.marks == [("start", 6), ("course", ["alice"]), ("finish", True)] and runner.closed == "done"
+    assert recorder.times["bob"][1] == "the times file"
+    # dana's batch: sent, lost, sent again, lost, then cut into single notebooks; dana alone is lost twice more
+    dana_batches = [b for b in runner.submitted if "dana" in b]
+    assert len(dana_batches[0]) > 1 and dana_batches[0] == dana_batches[1] and dana_batches[2:] == [["dana"]] * 2
+    dana = recorder.records[("dana", "00_warmup")]
+    assert not dana.complete and dana.score == 0 and dana.tests
+    assert all(t.reason.startswith("not graded: the worker machine went away; the instructor can grade it again "
+                                   "with --resume") for t in dana.tests)
+    for student in ("alice", "bob", "carl", "eve"):
+        assert recorder.records[(student, "00_warmup")].score == 11
+    assert recorder.records[("bob", "00_warmup")].late["penalty"] == 1.1  # the late decision, from the times file
+    malformed = recorder.records[("malformed", "00_warmup")]
+    assert malformed.score == 0 and malformed.notes[0].startswith("Not graded: ")
+    assert summary["rejected"] and summary["resumed"] == 0
+
+
+def test_an_interrupted_run_stays_marked_incomplete_and_its_runner_drops_what_has_not_started(tmp_path):
+    """A run stopped in its run stage (here Ctrl-C after the first batch) closes its runner with the batches not
+    started dropped, keeps the records it collected, says in its gradebook what is not graded yet, and is marked
+    interrupted in the course record; --resume finishes it."""
+    from particles.course.grading.driver import GradingInterrupted
+
+    subs, options = _late_course(tmp_path, others=("carl", "dana"))  # two batches of two
+
+    class Interrupted(MemoryRunner):
+        def completed(self):
+            for k, outcome in enumerate(super().completed()):
+                if k == 1:
+                    raise KeyboardInterrupt
+                yield outcome
+
+    runner, out = Interrupted(), tmp_path / "out"
+    with pytest.raises(GradingInterrupted, match="interrupted: 2 of 4 graded; rerun with --resume"):
+        grade([subs], out, runner=runner, jobs=2, **options)
+    assert runner.closed == "cancelled"
+    assert len(_current(out)) == 2
+    book = (out / "gradebook.csv").read_text()
+    assert book.count("00_warmup not graded yet (this run has not finished; rerun with --resume)") == 2
+    term = TermRecord(out)
+    assert term.db.execute("SELECT status FROM runs").fetchall() == [("interrupted",)]
+    assert len(term.pending()) == 2
+    term.close()
+    grade([subs], out, runner=MemoryRunner(), resume=True, jobs=2, **options)
+    assert len(_current(out)) == 4 and "not graded yet" not in (out / "gradebook.csv").read_text()

@@ -12,8 +12,10 @@ from pathlib import Path
 
 import pytest
 
+from particles.course.term.database import TermRecord
 from particles.course.grading.intake import (DEFAULT_LIMITS, Limits, NotebookRejected, ZipRefused, extract_zip,
                                              read_notebook)
+from particles.course.grading.session import NOT_RUN
 
 ROOT = Path(__file__).resolve().parents[3]
 MASTER = ROOT / "solutions" / "00_warmup.ipynb"
@@ -51,6 +53,8 @@ def _json(data):
 # kind -> (the file's bytes, or a function making the file at a path; a piece of the expected reason)
 MALFORMED = {
     "not_json": (b'{"cells": [', "is not valid JSON (Expecting value at line 1"),
+    "unterminated": (b'{"cells": ["abc', "is not valid JSON (Unterminated string starting at line 1, column 12)"),
+    "control_character": (b'{"cells": ["a\tb"]}', "is not valid JSON (Invalid control character at line 1, column 14)"),
     "truncated": (_json(notebook())[:-7], "is not valid JSON"),
     "nbformat3": (_json({"nbformat": 3, "nbformat_minor": 0, "metadata": {}, "worksheets": [{"cells": []}]}),
                   "is nbformat 3, expected 4: open it in Jupyter"),
@@ -278,21 +282,26 @@ def test_a_run_over_bad_input_grades_everyone_and_loses_no_one(tmp_path):
     assert sorted(rows) == sorted(["good", "zoe", "Alice", *bad])
     assert rows["good"]["00_warmup"] == rows["good"]["max_total"] == rows["zoe"]["00_warmup"]
     assert float(rows["good"]["max_total"]) > 0
+    term = TermRecord(out)
+    records = {student: r.to_dict() for (student, _), r in term.current().items()}
+    term.close()
     for student in ["Alice", *bad]:
         assert float(rows[student]["00_warmup"]) == 0, student
-        record = json.loads((out / "records" / f"{student}__00_warmup.json").read_text())
+        record = records[student]
         reasons = {t["reason"] for t in record["tests"]}
         assert len(record["tests"]) > 5 and len(reasons) == 1 and "\n" not in reasons.pop()
         assert record["grader_status"] is None  # never kept by --resume: checked again next time
-    record = json.loads((out / "records" / "latin1__00_warmup.json").read_text())
-    assert "your notebook latin1.ipynb could not be read: it is not UTF-8 text" in record["tests"][0]["reason"]
+    record = records["latin1"]
+    assert record["tests"][0]["reason"] == NOT_RUN  # the reason once, in the notes, not in every test
     assert "Not graded: your notebook latin1.ipynb could not be read: it is not UTF-8" in record["notes"][0]
-    conflict = json.loads((out / "records" / "Alice__00_warmup.json").read_text())["tests"][0]["reason"]
-    assert str(subs / "Alice" / "00_warmup.ipynb") in conflict and str(subs / "alice.ipynb") in conflict
+    feedback = (out / "latin1" / "feedback.md").read_text()
+    assert feedback.count("could not be read") == 1 and str(subs) not in feedback
+    conflict = records["Alice"]["notes"][0]
+    assert "00_warmup.ipynb" in conflict and "alice.ipynb" in conflict and str(subs) not in conflict
+    assert "grade again" not in conflict and f"{subs / 'alice.ipynb'}" in done.stderr
     assert "mallory" not in rows and f"{subs / 'mallory.ipynb'}: a link to" in done.stderr
     assert "bomb.zip: zip refused: member '../zed/00_warmup.ipynb' goes up" in done.stderr
-    assert "canvas.zip:zoe_late_11_22_00_warmup.ipynb" in json.loads(
-        (out / "records" / "zoe__00_warmup.json").read_text())["notebook"]
+    assert "canvas.zip:zoe_late_11_22_00_warmup.ipynb" in records["zoe"]["notebook"]
     assert not (tmp_path / "zed").exists()
 
 

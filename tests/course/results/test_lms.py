@@ -9,10 +9,11 @@ import pytest
 from particles.cli import main
 from particles.course.grading.discovery import student_key
 from particles.course.results import lms
-from particles.course.results.lms import (ExportError, RosterError, canvas_rows, export_grades, lms_number,
-                                          lms_text, match, moodle_rows, read_records, read_roster)
+from particles.course.results.lms import (ExportError, canvas_rows, export_grades, lms_number, lms_text, match,
+                                          moodle_rows, read_records)
 from particles.course.results.records import SubmissionRecord, TestRecord
-from particles.course.results.store import RecordStore
+from particles.course.term.database import TermRecord
+from particles.course.term.roster import RosterError, read_roster
 
 # Canvas, "How do I import grades in the Gradebook?"
 # https://community.canvaslms.com/t5/Instructor-Guide/How-do-I-import-grades-in-the-Gradebook/ta-p/807
@@ -66,11 +67,15 @@ def record(student, exercise, passed=(True, True), written=None, penalty=None):
 
 
 def graded(tmp_path, records):
-    """A graded folder: OUT/records/ written by the record store, as `particles grade --out` does."""
-    store = RecordStore(tmp_path / "out" / "records", {"public_only": False})
+    """A graded folder: its course record holding `records`, as `particles grade --out` leaves it."""
+    out = tmp_path / "out"
+    term = TermRecord(out)
+    run = term.start_run("particles grade (a test)", {})
     for r in records:
-        store.save(r)
-    return tmp_path / "out"
+        term.save(run, r, {"public_only": False})
+    term.finish_run(run)
+    term.close()
+    return out
 
 
 def roster_file(tmp_path, text, name="roster.csv"):
@@ -149,7 +154,7 @@ def test_record_not_on_roster_is_reported_never_dropped(tmp_path, capsys):
     code = main(["export", str(out), "--roster", str(roster), "--canvas", str(tmp_path / "c.csv")])
     assert code == 1
     err = capsys.readouterr().err
-    assert "not on the roster: zoe (01_integrator_order, 3.5/3.5 points, records/zoe__01_integrator_order.json)" in err
+    assert "not on the roster: zoe (01_integrator_order, 3.5/3.5 points, zoe/01_integrator_order)" in err
     report = list(csv.DictReader((out / "lms-report.csv").open(encoding="utf-8")))
     assert [(r["problem"], r["student"], r["points"]) for r in report if r["problem"] == "not on roster"] == [
         ("not on roster", "zoe", "3.5")]
@@ -237,42 +242,6 @@ def test_text_cells_neutralised():
     assert lms_text("=1+1") == "'=1+1" and lms_text("a=b") == "a=b" and lms_text("") == ""
 
 
-BAD_ROSTERS = [
-    ("", "is empty: expected a header line"),
-    ("\n\n", "is empty: expected a header line"),
-    ("submission_name,email\n", "has a header but no student"),
-    ("name,email\nAnn,a@x\n", "line 1: no column 'submission_name'"),
-    ("submission_name,email\nAnn,a@x\nann,b@x\n",
-     "line 3: the name 'ann' is the grader's 'ann', as the name on line 2"),
-    ("submission_name,email\nAnn Lee,a@x\nann_lee,b@x\n", "line 3: the name 'ann_lee'"),
-    ("submission_name,canvas_id\na,1\nb,1\n", "line 3: canvas_id '1' is also on line 2"),
-    ("submission_name,email\na,A@x.org\nb,a@X.org\n", "line 3: email 'a@X.org' is also on line 2"),
-    ("submission_name,SIS User ID\na,S1\nb,S1\n", "line 3: sis_user_id 'S1' is also on line 2"),
-    ("submission_name,canvas_id\na,12x\n", "line 2: canvas_id '12x' is not Canvas's numeric user ID"),
-    ("submission_name,email\na,=cmd|' /C calc'!A0\n", "line 2: email \"=cmd|' /C calc'!A0\" starts with '='"),
-    ("submission_name,email\n,a@x\n", "line 2: the name column is empty"),
-    ("submission_name,email\na,a@x,extra\n", "line 2: 3 cells; expected at most 2"),
-    ("submission_name,email,Email address\na,a@x,b@x\n", "line 1: columns 2 and 3 are both email"),
-]
-
-
-@pytest.mark.parametrize("text, message", BAD_ROSTERS)
-def test_bad_roster_is_refused_naming_file_and_line(tmp_path, text, message):
-    """A bad roster is refused with its file, the line and what was expected."""
-    path = roster_file(tmp_path, text)
-    with pytest.raises(RosterError) as error:
-        read_roster(path)
-    assert str(path) in str(error.value) and message in str(error.value)
-
-
-def test_name_column_that_is_an_identifier(tmp_path):
-    """--name-column may be an identifier column (it is both), but not beside another column of that identifier."""
-    roster = read_roster(roster_file(tmp_path, "Email,canvas_id\nann@uni.org,1\n"), name_column="email")
-    assert roster.students[0].email == roster.students[0].submission_name == "ann@uni.org"
-    with pytest.raises(RosterError, match="line 1: columns 3 and 1 are both email"):
-        read_roster(roster_file(tmp_path, "email,canvas_id,Email address\na@x,1,b@x\n"), name_column="email")
-
-
 def test_roster_not_utf8_or_missing(tmp_path, capsys):
     """A roster in another encoding, or none, is refused with its name (exit 2 from the command)."""
     path = tmp_path / "latin1.csv"
@@ -303,18 +272,20 @@ def test_records_of_one_student_twice_are_refused(tmp_path):
     """Two records of one exercise for one roster student (names differing in case) stop the export, naming both."""
     out = graded(tmp_path, [record("ann", "01_integrator_order"), record("Ann", "01_integrator_order")])
     roster = read_roster(roster_file(tmp_path, ROSTER))
-    with pytest.raises(ExportError, match=r"records Ann__01_integrator_order.json and ann__01_integrator_order.json"):
-        match(roster, read_records(out / "records"))
+    with pytest.raises(ExportError, match=r"records Ann/01_integrator_order and ann/01_integrator_order"):
+        match(roster, read_records(out)[0])
 
 
-def test_unreadable_record_and_no_records_folder(tmp_path):
-    """A record file that is not a record, or no records/ folder, is an error naming it (never a silent 'missing')."""
-    with pytest.raises(ExportError, match="is not a folder of records"):
+def test_no_course_record_and_an_unreadable_old_record(tmp_path):
+    """A folder without a course record, or an old records/ folder with a file that is not a record, is an error
+    naming it (never a silent 'missing')."""
+    with pytest.raises(ExportError, match="holds no course record"):
         read_records(tmp_path / "nothing")
-    out = graded(tmp_path, [record("ann", "01_integrator_order")])
-    (out / "records" / "bob__01_integrator_order.json").write_text('{"student": "bob"}')
-    with pytest.raises(ExportError, match=r"bob__01_integrator_order.json cannot be read .*'exercise'"):
-        read_records(out / "records")
+    old = tmp_path / "old"
+    (old / "records").mkdir(parents=True)
+    (old / "records" / "bob__01_integrator_order.json").write_text('{"student": "bob"}')
+    with pytest.raises(ExportError, match=r"bob__01_integrator_order.json into the course record: .*'exercise'"):
+        read_records(old)
 
 
 def test_canvas_refuses_an_exercise_titled_as_a_read_only_column(tmp_path):

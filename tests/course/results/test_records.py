@@ -62,7 +62,7 @@ def test_gradescope_output():
     record = SubmissionRecord(student="ada", exercise="01_integrator_order", tests=_tests(), seconds=2.25,
                               sandbox="namespaces, uid")
     data = to_gradescope("ada", [record], hidden_visibility="after_due_date")
-    assert (data["score"], data["max_score"], data["execution_time"]) == (2.0, 3.0, 2.25)
+    assert (data["score"], data["extra_data"]["max_score"], data["execution_time"]) == (2.0, 3.0, 2.25)
     first, second = data["tests"]
     assert first["number"] == "01.1" and first["status"] == "passed" and first["visibility"] == "visible"
     assert second["visibility"] == "after_due_date" and second["tags"] == ["01_integrator_order", "hidden"]
@@ -95,7 +95,7 @@ def test_gradescope_gives_a_stretch_goal_no_points_and_its_label():
     """In results.json an optional test has score and max_score 0, the label in its name, a tag and extra data."""
     record = SubmissionRecord(student="ada", exercise="01_integrator_order", tests=_with_stretch_goal())
     results = to_gradescope("ada", [record])
-    assert (results["score"], results["max_score"]) == (2.0, 3.0)
+    assert (results["score"], results["extra_data"]["max_score"]) == (2.0, 3.0)
     scored, stretch = results["tests"][:2], results["tests"][2:]
     assert [t["max_score"] for t in scored] == [2.0, 1.0]
     for entry in stretch:
@@ -104,7 +104,7 @@ def test_gradescope_gives_a_stretch_goal_no_points_and_its_label():
         assert entry["extra_data"]["optional"] is True
         assert entry["extra_data"]["label"] == "stretch goal, not scored"
     assert stretch[0]["status"] == "passed" and stretch[1]["status"] == "failed"
-    assert "01_integrator_order: 2 / 3 points" in results["output"]
+    assert "01_integrator_order: 2 / 2 points on the tests you can see" in results["output"]  # b is hidden
 
 
 def test_a_late_penalty_follows_the_points_written_grades_add():
@@ -116,3 +116,20 @@ def test_a_late_penalty_follows_the_points_written_grades_add():
     record.written = [{"question": "1", "points": 4.0, "max_points": 5.0, "comment": "", "rubric": "r"}]
     assert (record.penalty, record.total, record.total_max) == (3.0, 11.0, 15.0)
     assert "penalty -3 of 15 points" in " ".join(record.late_lines())
+
+
+def test_the_students_summary_never_counts_hidden_tests():
+    """Gradescope's top output says 2 / 2 on the visible tests (not 2 / 3) while a hidden test's points are hidden."""
+    record = SubmissionRecord(student="ada", exercise="01_integrator_order", tests=_tests(), seconds=1.0,
+                              late={"submitted": "x", "deadline": "y", "days_late": 1, "fraction": 0.1,
+                                    "penalty": 0.3, "reason": "submitted 2 hours after the deadline: -10%",
+                                    "source": "the times file"})
+    hidden = to_gradescope("ada", [record], hidden_visibility="after_published")
+    first = hidden["output"].splitlines()[0]
+    assert first.startswith("01_integrator_order: 2 / 2 points on the tests you can see")
+    assert "3" not in hidden["output"].replace("seed 7", "") and "max_score" not in hidden
+    assert "Late: submitted 2 hours after the deadline: -10%." in hidden["output"]
+    assert hidden["score"] == pytest.approx(2.0 - 0.3) and hidden["extra_data"]["max_score"] == 3.0
+    shown = to_gradescope("ada", [record], hidden_visibility="visible")
+    assert shown["output"].splitlines()[0] == "01_integrator_order: 2 / 3 points"
+    assert "raw score 2, penalty -0.3 of 3 points" in shown["output"]

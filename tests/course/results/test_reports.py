@@ -38,7 +38,6 @@ GRADESCOPE_SCHEMA = {  # https://gradescope-autograders.readthedocs.io/en/latest
     "type": "object",
     "properties": {
         "score": {"type": "number"},
-        "max_score": {"type": "number"},
         "execution_time": {"type": "number", "minimum": 0},
         "output": {"type": "string"},
         "output_format": _FORMAT,

@@ -74,14 +74,17 @@ def reviewed(tmp_path):
 
 
 def test_pages_are_self_contained_and_hold_no_markup_of_the_students(reviewed):
-    """No script, no remote address, images only as data: URIs; a hostile answer shows as escaped text."""
+    """No script but the review folder's MathJax, no remote address, images only as data: URIs; a hostile answer
+    shows as escaped text."""
     _, out, summary = reviewed
     assert [p.name for p in summary["pages"]] == ["question-1.html", "question-2.html", "question-3.html"]
     for page in [*summary["pages"], out / "index.html"]:
         text = page.read_text()
         parser = _Tags()
         parser.feed(text)
-        assert "script" not in {tag for tag, _ in parser.tags}
+        scripts = [attrs.get("src") for tag, attrs in parser.tags if tag == "script"]
+        assert scripts == ([] if page.name == "index.html" else ["../mathjax/review-config.js",
+                                                                  "../mathjax/tex-svg-full.js"])
         for tag, attrs in parser.tags:
             assert set(attrs) <= {"class", "id", "href", "src", "alt", "lang", "charset", "http-equiv", "content",
                                   "name"}, (tag, attrs)
@@ -105,7 +108,7 @@ def test_every_student_is_on_every_page_blank_answers_as_blank(reviewed):
         text = (out / EXERCISE / f"question-{k}.html").read_text()
         parser = _Tags()
         parser.feed(text)
-        assert [i for i in parser.ids] == ["ada", "bob", "cy"]
+        assert [i for i in parser.ids] == ["MathJax-script", "ada", "bob", "cy"]
         assert f"Question {k} (" in text and "The master's answer" in text
     second = (out / EXERCISE / "question-2.html").read_text()
     assert 'class="answer blank" id="bob"' in second and 'class="answer" id="ada"' in second
@@ -192,3 +195,80 @@ def test_a_notebook_the_grader_refuses_is_shown_blank_with_the_graders_reason(tm
     assert "ada" not in problems
     page = (tmp_path / "review" / EXERCISE / "question-1.html").read_text()
     assert "Order one." in page
+
+
+def test_review_opens_an_lms_zip_and_exits_1_on_a_problem(tmp_path, capsys):
+    """An LMS's zip is opened as `particles grade` opens it; a notebook not read makes the command exit 1."""
+    import zipfile
+    with zipfile.ZipFile(tmp_path / "download.zip", "w") as archive:
+        archive.writestr(f"ada/{EXERCISE}.ipynb", json.dumps(_submission({1: "Order one."})))
+        archive.writestr(f"bob/{EXERCISE}.ipynb", '{"cells": [')
+    code = main(["review", str(tmp_path / "download.zip"), "--out", str(tmp_path / "r"), "--root", str(ROOT)])
+    printed = capsys.readouterr()
+    assert code == 1 and "unzip it first" not in printed.err and "not valid JSON" in printed.err
+    assert "Order one." in (tmp_path / "r" / EXERCISE / "question-1.html").read_text()
+    rows = list(csv.DictReader((tmp_path / "r" / EXERCISE / "rubric.csv").open()))
+    assert {r["student"] for r in rows} == {"ada", "bob"}
+
+
+def test_a_rubric_folder_is_read_per_exercise(reviewed, tmp_path):
+    """A folder of rubrics of two exercises merges into a run of one: the other exercise's rows wait for theirs;
+    a file named on its own still must fit the run."""
+    subs, review, _ = reviewed
+    other = review / "00_warmup" / "rubric.csv"
+    other.parent.mkdir()
+    other.write_text(",".join(COLUMNS) + "\n00_warmup,zed,1,2,1,ok\n")
+    units, _ = find_submissions([subs], [EXERCISE])
+    written = WrittenGrades.load([review], units, ROOT)
+    assert written.covers(EXERCISE) and not written.covers("00_warmup")
+    with pytest.raises(ValueError, match="unknown exercise '00_warmup'"):
+        WrittenGrades.load([other], units, ROOT)
+
+
+MATH_ATTACKS = {  # the students' TeX: links, classes, styles, ids, raw HTML, \require, a dollar in prose
+    1: "Order one: $h\\mathbf v$ and $$\\dot{\\mathbf x} = \\mathbf v$$; it costs $5 at most.",
+    2: "$\\href{javascript:alert(1)}{click}$ $\\style{background:url(http://evil.example/x)}{y}$ "
+       "$\\class{pwn}{z}$ $\\cssId{pwn}{w}$ $\\require{html}$ $x</span><script>alert(2)</script>$",
+}
+
+SEEN = """(async () => {
+  if (window.MathJax && MathJax.startup) { await MathJax.startup.promise; }
+  return {spans: document.querySelectorAll('span.math').length,
+          typeset: document.querySelectorAll('span.math mjx-container').length,
+          elsewhere: document.querySelectorAll('mjx-container').length
+                     - document.querySelectorAll('span.math mjx-container').length,
+          scripts: Array.from(document.scripts).map(s => s.getAttribute('src')),
+          links: Array.from(document.querySelectorAll('[href]')).map(a => a.getAttribute('href')),
+          pwn: document.querySelectorAll('.pwn, #pwn').length,
+          styled: Array.from(document.querySelectorAll('mjx-container [style]'))
+                       .filter(e => /url\\(/.test(e.getAttribute('style'))).length,
+          prose: document.body.innerText};
+})()"""
+
+
+def test_math_is_typeset_safely_offline_in_the_browser(tmp_path):
+    """The equations of the question and of the answers are typeset by the review folder's MathJax, offline; the
+    students' TeX makes no link, class, id, style or script, a dollar in prose stays a dollar, and nothing but the
+    folder's own two scripts runs."""
+    from ...browser import Browser, find_or_install_chromium
+    subs = tmp_path / "subs"
+    (subs / "ada").mkdir(parents=True)
+    (subs / "ada" / f"{EXERCISE}.ipynb").write_text(json.dumps(_submission(MATH_ATTACKS)))
+    summary = write_review([subs], tmp_path / "review", root=ROOT)
+    assert summary["problems"] == [] and (tmp_path / "review" / "mathjax" / "review-config.js").exists()
+    with Browser(find_or_install_chromium()) as browser:
+        for k in (1, 2):
+            page = tmp_path / "review" / EXERCISE / f"question-{k}.html"
+            tab = browser.open(page)
+            seen = tab.evaluate(SEEN)
+            assert tab.outside(tmp_path / "review") == [] and tab.failed == [], (tab.outside(tmp_path), tab.failed)
+            assert [e for e in tab.errors if "Content Security Policy" not in e] == [], tab.errors
+            assert seen["spans"] > 0 and seen["typeset"] == seen["spans"] and seen["elsewhere"] == 0, seen
+            mathjax = (tmp_path / "review" / "mathjax").as_uri()
+            assert seen["scripts"][:2] == ["../mathjax/review-config.js", "../mathjax/tex-svg-full.js"]
+            assert all(src.startswith(mathjax) for src in seen["scripts"][2:]), seen["scripts"]  # its safe extension
+            assert not [href for href in seen["links"] if "javascript" in href or "evil" in href]
+            assert seen["pwn"] == 0 and seen["styled"] == 0
+            if k == 1:
+                assert "it costs $5 at most" in seen["prose"] and "\\mathbf" not in seen["prose"]
+            tab.close()

@@ -142,10 +142,10 @@ def test_feedback_gradebook_and_results_show_the_written_grades(tmp_path):
     assert "Half, see &lt;the&gt; norm" in page and "<the>" not in page and "no answer" in page
     write_gradebook(tmp_path / "gradebook.csv", {"ada": [ada], "bob": [bob]}, [EXERCISE])
     lines = (tmp_path / "gradebook.csv").read_text().splitlines()
-    assert lines[1:] == ["ada,8.5,8.5,17", "bob,5,5,17"]
+    assert lines[1:] == ["ada,8.5,8.5,17,complete", "bob,5,5,17,complete"]
     data = gradescope_results("ada", [ada], manual=written.manual())
     jsonschema.validate(data, GRADESCOPE_SCHEMA)
-    assert data["score"] == 8.5 and data["max_score"] == 17
+    assert data["score"] == 8.5 and data["extra_data"]["max_score"] == 17
     assert f"{EXERCISE}: Tests 4 / 10; written answers, graded by people, 4.5 / 7" in data["output"]
     entries = [t for t in data["tests"] if t["extra_data"].get("written")]
     assert [(t["score"], t["max_score"]) for t in entries] == [(2.5, 3), (2, 2), (0, 2)]
@@ -154,15 +154,15 @@ def test_feedback_gradebook_and_results_show_the_written_grades(tmp_path):
 
 
 def test_gradescope_marks_ungraded_written_questions_for_manual_grading():
-    """Without a rubric each written question is a 0-point entry saying its points and to add a manual question."""
+    """Without a rubric each written question is a 0-point entry saying its points, and nothing meant for instructors."""
     ada = _record("ada", blank=[2])
     data = gradescope_results("ada", [ada], manual=WrittenGrades.load([], UNITS, ROOT).manual())
     jsonschema.validate(data, GRADESCOPE_SCHEMA)
-    assert data["score"] == 4 and data["max_score"] == 10  # the autograder's part only
+    assert data["score"] == 4 and data["extra_data"]["max_score"] == 10  # the autograder's part only
     names = [t["name"] for t in data["tests"]]
     assert names[2:] == [f"{EXERCISE}: Question {k} (written answer, {p} points)" for k, p in ((1, 3), (2, 2), (3, 2))]
     manual = data["tests"][2:]
     assert all(t["score"] == t["max_score"] == 0 and "manual grading" in t["tags"] for t in manual)
     assert "graded by hand on Gradescope (3 points)" in manual[0]["output"]
-    assert "add a manual question" in manual[0]["output"]
+    assert "instructor" not in manual[0]["output"] and "manual question" not in manual[0]["output"]
     assert [t["extra_data"]["answered"] for t in manual] == [True, False, True]

@@ -273,10 +273,10 @@ def _echo_course(tmp_path, students):
 def test_records_of_a_killed_or_forged_session_are_discarded(tmp_path, monkeypatch):
     """Records of a session killed after forging them, or forged while the session's own went elsewhere, do
     not count: the batch is graded again notebook by notebook, and the forger gets every test 'not run'."""
-    import particles.course.grading.driver as grading
+    import particles.course.grading.plan as grading
 
     root, subs = _echo_course(tmp_path, {"good": "return x", "killer": "return 'kill'", "forger": "return 'forge'"})
-    monkeypatch.setattr(grading, "_batches", lambda units, jobs: [sorted(units, key=lambda u: u.student)])
+    monkeypatch.setattr(grading, "batches", lambda units, jobs: [sorted(units, key=lambda u: u.student)])
     summary = grade([subs], tmp_path / "out", root=root, seed=1, jobs=1)
     tests = {s: {t["test"]: t for t in r[0]["tests"]} for s, r in summary["students"].items()}
     assert all(t["passed"] for t in tests["good"].values()), tests["good"]
@@ -291,7 +291,7 @@ def test_records_of_a_killed_or_forged_session_are_discarded(tmp_path, monkeypat
 
 def test_a_records_file_without_the_sessions_signature_is_refused(tmp_path):
     """read_records accepts the file signed with the session's key only: not unsigned, altered or re-signed."""
-    from particles.course.grading.driver import read_records, sign_records
+    from particles.course.results.signing import read_records, sign_records
 
     key = b"k" * 32
     body = json.dumps({"submissions": [{"id": "0", "tests": []}]})

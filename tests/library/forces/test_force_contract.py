@@ -18,8 +18,8 @@ import pytest
 import particles
 from particles.constraints import RigidRods
 from particles.effects import Boids, Containment
-from particles.forces import Attractor, Damping, Field, Force, Gravity, LennardJones, NBodyGravity, Vortex, Wind
-from particles.forces import Bending, Clamp, Springs
+from particles.forces import (Attractor, Bending, Clamp, Damping, Field, Force, Gravity, LennardJones, NBodyGravity,
+                              Springs, SurfaceWind, Vortex, Wind)
 
 N = 12  # particles of every test configuration
 
@@ -85,6 +85,10 @@ CASES = [
     Case(Boids, lambda x: Boids(2.0, separation=0.3, alignment=1.0, cohesion=0.5, view_angle=2.5, max_force=4.0)),
     Case(Containment, lambda x: Containment(np.full(x.shape[1], 0.5), np.full(x.shape[1], 2.5), margin=0.6)),
     Case(RigidRods, lambda x: RigidRods(_chain(6), x=x), internal=True, constraint=True),
+    Case(SurfaceWind, lambda x: SurfaceWind([[0, 1, 2], [3, 4, 5], [6, 7, 8], [9, 10, 11], [0, 5, 10]],
+                                            velocity=[1.0, -0.5, 2.0], coefficient=0.8), dims=(3,)),
+    Case(SurfaceWind, lambda x: SurfaceWind([[0, 1, 2], [2, 3, 4]], velocity=lambda t: [0.0, 0.0, 1.0 + t],
+                                            coefficient=1.2), dims=(3,), label="gusts"),
 ]
 
 
