@@ -387,32 +387,6 @@ def test_each_kernel_without_a_formula_names_the_numpy_function_it_reproduces(ke
     assert reference.rpartition(".")[2].lstrip("_") in (ast.get_docstring(_functions(module)[name]) or "")
 
 
-CODE_LIMIT = 80
-
-
-def _code_lines(node, lines):
-    """Lines of code of a function: without its docstring, comments and blank lines."""
-    body = node.body
-    skip = set()
-    if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) \
-            and isinstance(body[0].value.value, str):
-        skip = set(range(body[0].lineno, body[0].end_lineno + 1))
-    return sum(1 for k in range(node.lineno, node.end_lineno + 1)
-               if k not in skip and lines[k - 1].strip() and not lines[k - 1].strip().startswith("#"))
-
-
-def test_no_library_function_is_over_80_lines_of_code():
-    """No function of the library (outside particles/course/) has more than 80 lines of code."""
-    long = {}
-    for name in sorted(LIBRARY):
-        text = MODULES[name].read_text(encoding="utf-8")
-        lines = text.splitlines()
-        for node in ast.walk(ast.parse(text)):
-            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and _code_lines(node, lines) > CODE_LIMIT:
-                long[f"{name}.{node.name}"] = _code_lines(node, lines)
-    assert long == {}
-
-
 def test_long_modules_are_listed_in_the_readme():
     """Every module over 400 lines (library and course tools) is named, with the reason, in the README's layout."""
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
@@ -631,13 +605,12 @@ def _code_lines(path):
             for line in range(token.start[0], token.end[0] + 1) if line not in docs}
 
 
-def test_no_function_of_the_course_tools_or_the_command_line_is_over_80_lines_of_code():
-    """Every function of particles/course/ and particles/cli/ (nested functions counted in their parent) is at most
-    80 lines of code: a long one is a list of steps that want names of their own."""
+def test_no_function_of_the_package_is_over_80_lines_of_code():
+    """Every function of the package, library and course tools alike (nested functions counted in their parent), is
+    at most 80 lines of code: a long one is a list of steps that want names of their own (a fused kernel is made of
+    its concepts' inlined laws, short by construction)."""
     long = []
-    for name, path in MODULES.items():
-        if not name.startswith(("particles.course", "particles.cli")):
-            continue
+    for name, path in sorted(MODULES.items()):
         code = _code_lines(path)
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):

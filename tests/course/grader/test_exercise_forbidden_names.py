@@ -18,10 +18,12 @@ def _forbidden(path):
 
 
 def test_the_exercises_are_found():
+    """The exercises' test files are found where the graders keep them (a wrong path would check nothing)."""
     assert len(EXERCISE_TESTS) >= 8
 
 
 @pytest.mark.parametrize("path", EXERCISE_TESTS, ids=lambda p: p.stem)
 def test_every_forbidden_name_resolves_to_a_library_object(path):
+    """Each name in an exercise's FORBIDDEN resolves, as the grader resolves it, to an object of the library."""
     stale = [name for name in _forbidden(path) if _resolve_object(name) is None]
     assert not stale, f"{path.name} forbids names the library does not have: {stale}"
