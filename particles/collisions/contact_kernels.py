@@ -27,10 +27,12 @@ for _law in (piece_root, cubic_unit_roots):  # laws with a loop: a function of t
     inline(_law, into="never")
 
 
-
 def _register_normal_or():
     """:func:`~particles.collisions.proximity.normal_or` in a kernel: its fallbacks computed only where used."""
-    from numba.extending import overload  # noqa: PLC0415
+    try:
+        from numba.extending import overload  # noqa: PLC0415
+    except ImportError:  # without numba the kernels run as plain Python, with normal_or itself
+        return
 
     @overload(normal_or)
     def _normal_or(v, n, g):
@@ -44,6 +46,7 @@ def _register_normal_or():
 
 
 _register_normal_or()
+
 
 def row3(x, i):
     return (x[i, 0], x[i, 1], x[i, 2])
@@ -76,17 +79,23 @@ def combine(W, x, rows, k):
     return (out0, out1, out2)
 
 
+def closest_row(x, rows, k, edge, parallel_tol, distance, normal, weights):
+    """The closest points of pair `k`, written into row `k` of `distance`, `normal`, `weights` and returned."""
+    P0, P1, P2, P3 = pair_points(x, rows, k)
+    dist, n, W = closest(P0, P1, P2, P3, edge, parallel_tol)
+    distance[k] = dist
+    for a in range(3):
+        normal[k, a] = n[a]
+    for j in range(4):
+        weights[k, j] = W[j]
+    return dist, n, W
+
+
 @jit(parallel=True)
 def closest_pairs(x, rows, edge, parallel_tol, distance, normal, weights):
     """Closest points of every pair `rows` (k, 4) into `distance` (k,), `normal` (k, 3), `weights` (k, 4)."""
     for k in prange(len(rows)):
-        P0, P1, P2, P3 = pair_points(x, rows, k)
-        dist, n, W = closest(P0, P1, P2, P3, edge, parallel_tol)
-        distance[k] = dist
-        for a in range(3):
-            normal[k, a] = n[a]
-        for j in range(4):
-            weights[k, j] = W[j]
+        closest_row(x, rows, k, edge, parallel_tol, distance, normal, weights)
 
 
 @jit(parallel=True)
@@ -94,13 +103,7 @@ def proximity_rows(x0, vbar, w, xr, rest, rows, edge, h, thickness, rest_distanc
                    normal, weights):
     """The proximity tests of ``ClothCollisions._proximity_contacts`` per candidate pair, into `keep` and the rest."""
     for k in prange(len(rows)):
-        P0, P1, P2, P3 = pair_points(x0, rows, k)
-        dist, n, W = closest(P0, P1, P2, P3, edge, parallel_tol)
-        distance[k] = dist
-        for a in range(3):
-            normal[k, a] = n[a]
-        for j in range(4):
-            weights[k, j] = W[j]
+        dist, n, W = closest_row(x0, rows, k, edge, parallel_tol, distance, normal, weights)
         vN = vdot(n, combine(W, vbar, rows, k))
         ok = approaching_within(dist, vN, h, thickness)
         eff = 0.0
@@ -196,5 +199,5 @@ def first_contact_pairs(x0, dx, rows, edge, eta, f_tol, bisections, parallel_tol
 
 
 # helpers compiled into the kernels, each a function of its own
-for _helper in (row3, closest, pair_points, combine, rest_far, moved_point, at_time):
+for _helper in (row3, closest, pair_points, closest_row, combine, rest_far, moved_point, at_time):
     inline(_helper, into="never")
