@@ -44,9 +44,9 @@ def _block_strains(b, blocks, X, i, j, L0, movable, max_strain, jacobi, c, too):
         if movable[q]:
             worst = max(worst, L / L0[q] - 1.0)
         if jacobi:
-            excess = provot_excess(L, L0[q], max_strain) * movable[q]
+            excess = provot_excess(L, L0[q], max_strain) if movable[q] else 0.0
             too[q] = excess > 0
-            if too[q]:
+            if excess > 0:
                 c[q, 0] = excess * (d0 / L)
                 c[q, 1] = excess * (d1 / L)
                 c[q, 2] = excess * (d2 / L)
@@ -98,9 +98,8 @@ def _correct(q, X, i, j, L0, wi, wj, movable, max_strain):
             X[j[q], 0, 2] += wj[q] * c2
 
 
-inline(_length)
-for _helper in (_block_strains, _average, _correct):  # loops and branches: functions of their own (see inline)
-    inline(_helper, into="never")
+for _helper in (_length, _block_strains, _average, _correct):  # compiled into provot_passes
+    inline(_helper)
 
 
 @jit(parallel=True)
