@@ -6,8 +6,8 @@ In one run, on the same springs and the same pairs:
    springs, all with damping along the spring, gravity, two pinned corners,
    float64), 64^2 and 128^2 particles: the library's symplectic Euler step
    with ``backend="numpy"`` and ``backend="numba"``, called as
-   ``symplectic_euler(c.derivative, X, t, h)`` (with numba the compiled
-   step, :meth:`particles.ParticleSystem.fused_symplectic_euler`), then per step of
+   ``c.stepper("symplectic_euler")(c.derivative, X, t, h)`` (with numba the compiled
+   step, :meth:`particles.massspring.MassSpringSystem.stepper`), then per step of
    ``run`` itself (its divergence guard included), and the force pass
    alone; then the same step written as a Warp kernel on its CPU backend
    (one thread) and as a Taichi kernel on the CPU (as many threads as numba),
@@ -212,7 +212,7 @@ def one_thread():
 
 def part1(sizes, threads):
     print("1. One explicit cloth step (springs with damping + gravity + symplectic Euler), ms")
-    print("   step: symplectic_euler(c.derivative, X, t, h) (numba: the compiled step of the system);")
+    print("   step: c.stepper('symplectic_euler')(c.derivative, X, t, h) (numba: the compiled step of the system);")
     print("   run: per step of c.run, its divergence guard included;")
     print("   forces: c.total_force alone (numba: the per-force kernels); 1 thread: the compiled step on one thread")
     print(f"{'particles':>10} {'springs':>8} {'numpy':>8} {'numba':>8} {'1 thread':>8} {'run np':>8} {'run nb':>8} "
@@ -225,18 +225,19 @@ def part1(sizes, threads):
         times = {}
         with backends.using("numpy"):
             reference = symplectic_euler(c.derivative, X, 0.0, H)
+        step = c.stepper("symplectic_euler")  # with numba, the compiled step of the system
         for _ in range(ROUNDS):  # rounds spread over a second or so: the best of each is kept
             for be in ("numpy", "numba"):
                 with backends.using(be):
-                    f = c.derivative  # with numba, symplectic_euler takes the compiled step of its system
-                    got = symplectic_euler(f, X, 0.0, H)
+                    f = c.derivative
+                    got = step(f, X, 0.0, H)
                     assert np.abs(got - reference).max() <= 1e-12 * np.abs(reference).max(), be
-                    for key, t in ((be, best_time(lambda: symplectic_euler(f, X, 0.0, H), repeat=50)),
+                    for key, t in ((be, best_time(lambda: step(f, X, 0.0, H), repeat=50)),
                                    ("run " + be, run_step_time(c, X)),
                                    ("forces " + be, best_time(lambda: c.total_force(X, 0.0), repeat=50))):
                         times[key] = min(times.get(key, np.inf), t)
             with backends.using("numba"), one_thread():
-                t = best_time(lambda: symplectic_euler(f, X, 0.0, H), repeat=50)
+                t = best_time(lambda: step(f, X, 0.0, H), repeat=50)
                 times["numba 1"] = min(times.get("numba 1", np.inf), t)
         for name, make in (("warp", lambda: warp_step(c, X)), ("taichi", lambda: taichi_step(c, X, threads))):
             made = make()
@@ -347,7 +348,7 @@ def main(argv=None):
         return
     import numba
 
-    import particles.backends.compiled  # noqa: F401  (before numba starts its threads: it picks their pool)
+    import particles.backends.compile  # noqa: F401  (before numba starts its threads: it picks their pool)
 
     threads = numba.get_num_threads()
     print(f"numba {numba.__version__}, {threads} threads; load average before: {os.getloadavg()[0]:.2f}")

@@ -8,7 +8,7 @@ makes it, stepped by symplectic Euler through :meth:`ParticleSystem.run`
 * springs + gravity (the defaults, two pinned corners);
 * ``damping=0.05``: air damping (:class:`~particles.forces.fields.Damping`, the lectures' cloth);
 * ``kd=2e-4``: damping along every spring;
-* ``bending_modulus=1e-4``: bending at the joints (:class:`~particles.springs.Bending`);
+* ``bending_modulus=1e-4``: bending at the joints (:class:`~particles.forces.Bending`);
 * ``wind=(2, 0, 1)`` with ``damping=0.05``: wind and drag;
 * ``pins="top edge"``: 128 pins;
 * Provot's pass (:class:`~particles.constraints.ProvotConstraint`, structural and shear springs, 10%);
@@ -17,8 +17,9 @@ makes it, stepped by symplectic Euler through :meth:`ParticleSystem.run`
 * all of them at once (damping, kd, bending, wind, Provot's pass and the sphere).
 
 NumPy is ``backends.using("numpy")``, compiled ``backends.using("numba")``
-(the compiled step, :class:`particles.backends.compiled.CompiledStep`, and
-the compiled fixes, :mod:`particles.backends.fixes`); "1 thread" is the
+(the compiled step, :class:`particles.massspring.compiled_step.CompiledStep`, and
+the compiled fixes, :mod:`particles.constraints.kernels` and
+:mod:`particles.collisions.collider_kernels`); "1 thread" is the
 compiled path with numba on one thread (the time when the other core is
 busy). Each configuration starts both from the same state, and their end
 states after one step are checked against each other first (1e-12
@@ -127,7 +128,7 @@ def main(argv=None):
         return
     import numba
 
-    import particles.backends.compiled  # noqa: F401  (before numba starts its threads: it picks their pool)
+    import particles.backends.compile  # noqa: F401  (before numba starts its threads: it picks their pool)
 
     n = args.size or (64 if args.quick else 128)
     print(f"numba {numba.__version__}, {numba.get_num_threads()} threads; load average before: "

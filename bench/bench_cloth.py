@@ -4,7 +4,7 @@ Part 1. One explicit step (all forces + symplectic Euler) of a hanging cloth
 with structural, shear and flexion springs in one generic spring list, at
 32^2 ... 256^2 particles:
 
-* vectorized  ParticleSystem with one particles.springs.Springs force;
+* vectorized  ParticleSystem with one particles.forces.Springs force;
 * loop        the same step written with Python loops over springs and
               particles (the naive baseline).
 
@@ -44,7 +44,7 @@ from particles.forces import Damping, Gravity  # noqa: E402
 from particles.implicit import BaraffWitkin, Prefactored  # noqa: E402
 from particles.integrators import symplectic_euler  # noqa: E402
 from particles.massspring import cloth  # noqa: E402
-from particles.springs import Springs  # noqa: E402
+from particles.forces import Springs  # noqa: E402
 
 G = (0.0, 0.0, -9.81)
 DAMPING = 0.01

@@ -13,9 +13,9 @@ then the median and the worst time per step and the crossing pairs at the
 worst step. Each run is made ``--repeat`` times (default 2), and each step's time is its best: the
 runs are the same steps bit for bit (checked), so the best leaves out what the host took from one of them
 (one run alone showed a worst step of 325 ms where the step itself takes 241). ``--backend`` chooses who runs the collision stages
-(:mod:`particles.backends.cloth`) and the XPBD substeps (:mod:`particles.backends.xpbdstep`)
-("auto": the collision stages compiled from 64 vertices, :data:`particles.backends.CLOTH_COLLISION_WEIGHT`;
-XPBD from 1024 particles, :data:`particles.backends.XPBD_WEIGHT`);
+(:mod:`particles.collisions.compiled_stages`) and the XPBD substeps (:mod:`particles.xpbd.compiled_substep`)
+("auto": the collision stages compiled from 64 vertices, :data:`particles.collisions.candidate_cache.CLOTH_COLLISION_WEIGHT`;
+XPBD from 1024 particles, :data:`particles.xpbd.solver.XPBD_WEIGHT`);
 ``--compare`` runs the treated sheet with NumPy and with numba side by side
 (a column each), after a warm-up that loads the compiled kernels.
 
@@ -113,8 +113,9 @@ def report(label, runs, window=0.25):
 
 def xpbd_sizes(sides=(8, 16, 24, 32, 48, 64), rounds=2, steps=20):
     """The sheet's XPBD steps alone (10 substeps, no collisions), NumPy against compiled, per size: the
-    measurements behind :data:`particles.backends.XPBD_WEIGHT` (best of `rounds` alternating runs)."""
-    from particles.backends import AUTO_MIN, XPBD_WEIGHT
+    measurements behind :data:`particles.xpbd.solver.XPBD_WEIGHT` (best of `rounds` alternating runs)."""
+    from particles.backends import AUTO_MIN
+    from particles.xpbd.solver import XPBD_WEIGHT
 
     print(f"\nXPBD alone, 10 substeps, ms per step (auto compiles from {AUTO_MIN // XPBD_WEIGHT} particles)")
     print(f"{'sheet':>8} {'particles':>10} {'NumPy':>8} {'compiled':>9} {'ratio':>6}")
@@ -134,12 +135,12 @@ def xpbd_sizes(sides=(8, 16, 24, 32, 48, 64), rounds=2, steps=20):
 
 def warm_up():
     """Load (or, with a cold cache, compile) the kernels before the timing: the collision pipeline's and
-    XPBD's (:func:`particles.backends.warm.warm`), then one step of a small sheet.
+    XPBD's (:func:`particles.warm.warm`), then one step of a small sheet.
 
     A first run in a fresh clone compiles them here (about half a minute), not in its first steps: one
     step of an 8 x 8 sheet alone met a few of them, and the 64^2 run's worst step was then 17.7 s.
     """
-    from particles.backends.warm import warm
+    from particles.warm import warm
 
     warm(["cloth collisions", "constraints"])
     run(8, H, True, backend="numba")

@@ -14,51 +14,13 @@ Run: .venv/bin/python bench/bench_cluster.py [--copies 2] [--repeat 2] [--exerci
 """
 
 import argparse
-import copy
 import json
 import os
 import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-
-
-def _source(cell):
-    return "".join(cell["source"]) if isinstance(cell["source"], list) else cell["source"]
-
-
-def variants(exercise):
-    """name -> notebook: the master, the stub, and the master with each solution cell left undone."""
-    from particles.course.release.answers import BEGIN, END
-    from particles.course.release.notebooks import read_master, release_notebook
-
-    master = read_master(ROOT / "solutions" / f"{exercise}.ipynb")
-    found = {"master": master, "stub": release_notebook(master, exercise)}
-    marked = [k for k, c in enumerate(master.cells) if c.cell_type == "code" and BEGIN in _source(c)]
-    for k in marked:  # only cell k keeps its markers: released, it alone becomes a stub
-        one = copy.deepcopy(master)
-        for j in marked:
-            if j != k:
-                lines = _source(one.cells[j]).split("\n")
-                one.cells[j].source = "\n".join(line for line in lines if line.strip() not in (BEGIN, END))
-        found[f"undone{k}"] = release_notebook(one, exercise)
-    return found
-
-
-def write_corpus(folder, exercises, copies):
-    """The corpus as ``folder/<student>/<exercise>.ipynb``; returns how many notebooks."""
-    import nbformat
-
-    count = 0
-    for exercise in exercises:
-        for name, notebook in variants(exercise).items():
-            for k in range(copies):
-                student = folder / f"{exercise}-{name}-{k}"
-                student.mkdir(parents=True)
-                nbformat.write(notebook, student / f"{exercise}.ipynb")
-                count += 1
-    return count
+from _corpus import ROOT, write_corpus
 
 
 def main():

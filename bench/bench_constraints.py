@@ -25,7 +25,7 @@ measured in the same run). The load average is printed before and after.
 
 First, the XPBD substep itself (issue 24's acceptance: compiled at 128^2 at
 least 8x the NumPy solver), NumPy against the compiled substep
-(:class:`particles.backends.xpbdstep.CompiledSubstep`: one compiled call per
+(:class:`particles.xpbd.compiled_substep.CompiledSubstep`: one compiled call per
 substep), both as ``XPBD.from_system(..., backend=...)``, Gauss-Seidel, one
 iteration: a step of one substep (the violation measured at its end
 included), and a step of 10 substeps divided by 10, on
@@ -170,7 +170,7 @@ def xpbd_substeps(n, rounds=3):
         return
     import numba
 
-    import particles.backends.compiled  # noqa: F401  (before numba starts its threads: it picks their pool)
+    import particles.backends.compile  # noqa: F401  (before numba starts its threads: it picks their pool)
 
     threads = numba.get_num_threads()
     print(f"XPBD substep at {n}^2, Gauss-Seidel, 1 iteration (numba {numba.__version__}, {threads} threads, "

@@ -6,10 +6,10 @@ one worker process per submission inside it. ``grade`` splits the notebooks
 into batches of one exercise, at most 20, each about a ``2 * jobs``-th of the
 notebooks not yet batched (guided self-scheduling: large batches first, small
 ones at the end), so the batches are independent and two jobs on a 2-core
-machine should approach a 2x speed-up. The 50 notebooks are a mix from the
-grader's corpus (correct variants, the master, the stub and quick-failing
-wrong answers; no timeouts, which would measure sleeping rather than
-grading).
+machine should approach a 2x speed-up. The 50 notebooks are made from the
+course's master (``_corpus.py``): the master, its stub and the master with one
+solution cell left undone, in turn (no timeouts, which would measure sleeping
+rather than grading).
 
 The machine is shared: the script interleaves the settings, keeps the best
 of each, and prints the CPU time of the graders so that a low speed-up caused
@@ -21,9 +21,9 @@ The third setting grades with the Python-level walls alone (no namespaces, no
 uid of its own, no Landlock: the grader as it was before the operating
 system's layers), the baseline of the per-submission cost.
 
-With ``--corpora``, it grades instead each exercise's corpus of
-``tests/course/grader`` (typical wrong answers, correct variants, the master
-and the stub: about 16 notebooks each, ``--jobs 2``), with the output folder
+With ``--corpora``, it grades instead each exercise's corpus of ``_corpus.py``
+(the master, the stub and each solution cell left undone, twice under other
+names: about 16 notebooks each, ``--jobs 2``), with the output folder
 (feedback files, their figures drawn by the driver) and without it, and
 prints the seconds per notebook of each exercise and what the outputs add.
 
@@ -32,33 +32,26 @@ Run: .venv/bin/python bench/bench_grading.py [--n 50] [--repeat 2] [--corpora]
 
 import argparse
 import itertools
-import json
 import os
 import resource
-import sys
 import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests" / "course" / "grader"))
+from _corpus import ROOT, variants, write_corpus
+from particles.course.walls import isolation
+from particles.course.grading.driver import grade
 
-import corpus  # noqa: E402
-
-from particles.course.walls import isolation  # noqa: E402
-from particles.course.grading.driver import grade  # noqa: E402
-
-QUICK = ["euler_as_midpoint", "wrong_shape", "returns_nan", "mutates_input", "calls_sys_exit",
-         "calls_the_library_stepper", "hard_codes_public_answers", "wrong_damping_sign", "run_off_by_one"]
+WARMUP = "00_warmup"
 
 
 def make_submissions(folder, n):
-    cases = dict(corpus.REJECTED, **corpus.CORRECT)
-    names = list(corpus.CORRECT) + QUICK + ["master", "released_stub"]
-    texts = {"master": corpus.MASTER.read_text(), "released_stub": corpus.STUB.read_text()}
-    for k, name in zip(range(n), itertools.cycle(names)):
-        text = texts.get(name) or json.dumps(corpus.build(cases[name]))
-        (folder / f"student{k:03d}_00_warmup.ipynb").write_text(text)
+    """`n` notebooks of 00_warmup as folder/studentNNN_00_warmup.ipynb: the master, the stub and each undone cell
+    in turn."""
+    import nbformat  # noqa: PLC0415
+
+    for k, notebook in zip(range(n), itertools.cycle(variants(WARMUP).values())):
+        nbformat.write(notebook, folder / f"student{k:03d}_{WARMUP}.ipynb")
 
 
 def main():
@@ -66,7 +59,7 @@ def main():
     parser.add_argument("--n", type=int, default=50, help="number of submissions (default 50)")
     parser.add_argument("--repeat", type=int, default=2, help="runs of each setting, interleaved (default 2)")
     parser.add_argument("--corpora", action="store_true",
-                        help="grade the six exercises' corpora instead, with and without the feedback files")
+                        help="grade each exercise's corpus instead, with and without the feedback files")
     args = parser.parse_args()
     if args.corpora:
         return corpora(args.repeat)
@@ -108,9 +101,8 @@ def main():
 
 def corpora(repeat):
     """Seconds per notebook of each exercise's corpus, --jobs 2, with the output folder and without."""
-    import exercise_corpus  # noqa: PLC0415  (the tests' corpora, beside corpus.py)
-
     from particles.course.grading import figures  # noqa: PLC0415  (its cache of drawn figures, cleared per run)
+    from particles.course.paths import exercise_names  # noqa: PLC0415
 
     settings = ("with feedback files", "verdicts only")
     print(f"each exercise's corpus, --jobs 2, best of {repeat} interleaved runs; load average before: "
@@ -118,20 +110,20 @@ def corpora(repeat):
     print(f"{'exercise':<22}{'notebooks':>10}" + "".join(f"{name + ', s':>24}" for name in settings)
           + f"{'per notebook':>14}{'outputs add':>13}")
     with tempfile.TemporaryDirectory() as tmp:
-        for module in exercise_corpus.case_modules():  # a loop over the six exercises
-            folder = Path(tmp) / module.EXERCISE
-            n = len(exercise_corpus.write_corpora(folder, [module]))
+        for exercise in exercise_names(ROOT):  # a loop over the exercises
+            folder = Path(tmp) / exercise
+            n = write_corpus(folder, [exercise], copies=2)
             best = {name: float("inf") for name in settings}
             for run in range(repeat):  # interleaved, so that a burst of load elsewhere hits both settings
                 for name in settings:
-                    out = Path(tmp) / f"out-{module.EXERCISE}-{run}" if name == settings[0] else None
+                    out = Path(tmp) / f"out-{exercise}-{run}" if name == settings[0] else None
                     figures.clear_cache()  # the figures of an earlier run (same seed, same figures) are drawn again
                     start = time.perf_counter()
                     summary = grade([folder], out, jobs=2, seed=1, time_limit=10.0, root=ROOT)
                     best[name] = min(best[name], time.perf_counter() - start)
                     assert len(summary["students"]) == n
             full, verdicts = (best[name] for name in settings)
-            print(f"{module.EXERCISE:<22}{n:>10}{full:>24.1f}{verdicts:>24.1f}{full / n:>13.2f}s"
+            print(f"{exercise:<22}{n:>10}{full:>24.1f}{verdicts:>24.1f}{full / n:>13.2f}s"
                   f"{100 * (full / verdicts - 1):>12.0f}%")
     print(f"load average after: {os.getloadavg()[0]:.2f}")
 

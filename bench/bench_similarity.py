@@ -1,6 +1,6 @@
 """Similarity report on a synthetic class: 300 submissions of 02_stiffness (9 asked functions each).
 
-The class is made by ``tests/course/similarity/test_compare.py::write_synthetic``: about a
+The class is made by ``synthetic_class.py``'s ``write_synthetic``: about a
 third of the functions are the master's with renamed variables, half are
 mutated (one to three inserted statements, changed constants), a fifth are
 rewritten from random statements, and ten students copy every function of
@@ -24,12 +24,11 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _timing import best_time  # noqa: E402
 from particles.course.similarity import compare as S  # noqa: E402
-from tests.course.similarity.test_compare import write_synthetic  # noqa: E402
+from synthetic_class import write_synthetic  # noqa: E402
 
 
 def main():

@@ -3,7 +3,7 @@
 The compiled kernels (:mod:`particles.backends`) run their long loops on numba's threads, and a step
 is many short parallel loops: one per step of a cloth (a fraction of a millisecond each), one per
 colour group of an XPBD substep (17 per substep on a 128^2 cloth, tens of microseconds each). The
-thread pool then matters as much as the kernels. :mod:`particles.backends._kernels` picks GNU OpenMP
+thread pool then matters as much as the kernels. :mod:`particles.backends.compile` picks GNU OpenMP
 with a bounded spin (``GOMP_SPINCOUNT=10000``) unless the user chose a layer; this script measures
 that choice against numba's work queue and against OpenMP's default spin, each in its own process
 (a process keeps the layer it started with):
@@ -11,7 +11,7 @@ that choice against numba's work queue and against OpenMP's default spin, each i
 * ``start``: an empty parallel loop of two iterations, on two threads (us);
 * ``loop 1t``, ``loop 2t``: a parallel loop of two chunks of about 0.1 ms of arithmetic each, on one
   thread and on two (us): on two, it should take half the time;
-* ``xpbd alone``: a 128^2 XPBD substep (:func:`particles.backends._pbd_kernels.substep`, damped
+* ``xpbd alone``: a 128^2 XPBD substep (:func:`particles.xpbd.kernels.substep`, damped
   springs, every colour group in parallel), ms;
 * ``xpbd shared``: the same, while a second process runs the same substeps on its own two threads:
   two processes on two cores, as a test suite run with two workers, or a class's kernels on a
@@ -39,7 +39,7 @@ CONFIGURATIONS = {  # name: the environment of the process
 PROBE = r"""
 import json, math, sys, time
 import numpy as np
-import particles.backends._kernels  # its choice of layer, unless the environment has one
+import particles.backends.compile  # its choice of layer, unless the environment has one
 import numba
 from numba import prange
 
@@ -69,9 +69,9 @@ numba.set_num_threads(2)
 result["layer"] = numba.threading_layer()
 sys.path.insert(0, sys.argv[1])
 from bench_constraints import substep_cases
-from particles.backends import _kernels
+from particles.backends import compile as kernels
 from particles.xpbd import XPBD
-_kernels.PARALLEL_MIN = 0  # every colour group in parallel
+kernels.PARALLEL_MIN = 0  # every colour group in parallel
 c, X = substep_cases(128)["damped springs, gravity"]
 solver = XPBD.from_system(c, substeps=10, iterations=1, backend="numba")
 solver(None, X, 0.0, 1 / 60)

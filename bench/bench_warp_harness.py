@@ -35,7 +35,7 @@ three runs of the 60 timed frames follow, each from the initial state, in rounds
 NumPy, numba and Warp (a slow minute of a shared machine then falls on all of them; Taichi runs
 after them, one precision at a time, as ``ti.init`` requires); the time per step is the best
 frame's time over 16 (the mean frame's in brackets). A run of ``run`` takes the 16 steps of a
-frame in one compiled call (:meth:`particles.backends.compiled.CompiledStep.symplectic_euler_steps`),
+frame in one compiled call (:meth:`particles.massspring.compiled_step.CompiledStep.symplectic_euler_steps`),
 its divergence guard included. Warp's CPU backend runs its kernels on
 one thread; numba runs the compiled step on ``numba.get_num_threads()`` threads (also timed on
 one) and Taichi on as many.
@@ -319,7 +319,7 @@ def main(argv=None):
         return
     import numba
 
-    import particles.backends.compiled  # noqa: F401  (before numba starts its threads: it picks their pool)
+    import particles.backends.compile  # noqa: F401  (before numba starts its threads: it picks their pool)
 
     threads = numba.get_num_threads()
     notes = [f"{name} is not installed (pip install 'particles[bench]'): its columns are skipped"

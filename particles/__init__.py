@@ -7,8 +7,8 @@ steppers ``step(f, X, t, h)`` or solver objects ``solver.step(X, t, h)``.
 One package per area of the lecture, each ``__init__`` docstring its map:
 
 * :mod:`particles.integrators`: steppers, solver forms, the time loop;
-* :mod:`particles.forces`: gravity, damping, fields, pair forces, N-body, Lennard-Jones;
-* :mod:`particles.massspring`: strings, hair and cloth builders (springs in :mod:`particles.springs`);
+* :mod:`particles.forces`: gravity, damping, fields, springs and bending, pair forces, N-body, Lennard-Jones;
+* :mod:`particles.massspring`: strings, hair and cloth builders, and their compiled step;
 * :mod:`particles.implicit`: implicit solvers of stiff springs (Baraff-Witkin, prefactored), statics;
 * :mod:`particles.constraints`: Provot's strain limit, rigid rods;
 * :mod:`particles.xpbd`: position-based dynamics;
@@ -16,13 +16,14 @@ One package per area of the lecture, each ``__init__`` docstring its map:
 * :mod:`particles.effects`: emitters, particle effects, colours, flocks;
 * :mod:`particles.md`: molecular dynamics in a periodic box;
 * :mod:`particles.explore`: explorations of a parameter with a slider;
-* :mod:`particles.backends`: compiled kernels; :mod:`particles.demos`, :mod:`particles.studies`: demos and studies;
+* :mod:`particles.backends`: the switch between the NumPy reference and the compiled kernels (each package keeps
+  its own ``kernels.py``); :mod:`particles.demos`, :mod:`particles.studies`: demos and studies;
 * :mod:`particles.course`: release and grading of the exercises.
 
 The root keeps what every area shares: :mod:`particles.system` (:class:`ParticleSystem`, births and deaths
-in :mod:`particles.population`), :mod:`particles.springs`, :mod:`particles.neighbors` (bucket grid),
-:mod:`particles.problems`, :mod:`particles.errors`, the command line (:mod:`particles.cli`,
-:mod:`particles.tour`) and drawing (:mod:`particles.render`, imported on demand because it loads
+in :mod:`particles.population`), :mod:`particles.neighbors` (bucket grid), :mod:`particles.problems`,
+:mod:`particles.errors`, the command line (:mod:`particles.cli`, :mod:`particles.tour`, :mod:`particles.warm`)
+and drawing (:mod:`particles.render`, imported on demand because it loads
 Matplotlib's pyplot). ``CONTRIBUTING.md`` says where to make a change and describes the data flow of a step.
 
 >>> import particles
@@ -31,8 +32,7 @@ Matplotlib's pyplot). ``CONTRIBUTING.md`` says where to make a change and descri
 >>> t, X = ps.run(0.5, h=0.01, method="verlet")
 """
 
-from . import (collisions, constraints, effects, forces, implicit, integrators, massspring, md, neighbors, springs,
-               xpbd)
+from . import collisions, constraints, effects, forces, implicit, integrators, massspring, md, neighbors, xpbd
 from .collisions import ClothCollisions, Collider
 from .effects import Flock, ParticleEffect
 from .errors import ConvergenceError, SimulationDiverged

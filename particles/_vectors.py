@@ -5,11 +5,19 @@
 one column per spring or pair) and rows of an ``(n, dim)`` array (gradients
 of implicit surfaces, one row per particle); and :func:`rowdot`, the dot
 product of rows summed in coordinate order.
+
+The laws of one item written for the NumPy code and the compiled kernels
+alike (the closest points of two pieces of cloth, the coplanarity cubic)
+take their 3-vectors as tuples ``(x, y, z)``, each component a number (in a
+kernel) or an array over the items (in NumPy), and use :func:`vdot`,
+:func:`vsub`, :func:`vadd`, :func:`vcross`, :func:`vscale` and
+:func:`select`: ``np.where`` on arrays, a plain branch on numbers in a
+kernel (:mod:`particles.backends.compile` registers it with numba).
 """
 
 import numpy as np
 
-__all__ = ["unit", "rowdot"]
+__all__ = ["unit", "rowdot", "select", "vdot", "vsub", "vadd", "vcross", "vscale", "vselect"]
 
 
 def unit(d, axis=0):
@@ -71,3 +79,43 @@ def rowdot(a, b):
     for k in range(1, a.shape[1]):  # a loop over the dim coordinates
         out += a[:, k] * b[..., k]
     return out
+
+
+def select(condition, a, b):
+    """`a` where `condition` holds, else `b`: ``np.where`` on arrays; in a compiled kernel, a branch on numbers."""
+    return np.where(condition, a, b)
+
+
+def any_of(condition):
+    """Whether `condition` holds anywhere: ``np.any`` on arrays; in a compiled kernel, the one bool itself."""
+    return bool(np.any(condition))
+
+
+def vdot(a, b):
+    """``a . b`` of 3-tuples, summed in coordinate order (as :func:`rowdot`)."""
+    return (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2]
+
+
+def vsub(a, b):
+    """``a - b`` of 3-tuples."""
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+def vadd(a, b):
+    """``a + b`` of 3-tuples."""
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+def vcross(a, b):
+    """``a x b`` of 3-tuples."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def vscale(s, a):
+    """``s a`` of a number (or array) and a 3-tuple."""
+    return (s * a[0], s * a[1], s * a[2])
+
+
+def vselect(condition, a, b):
+    """The 3-tuple `a` where `condition` holds, else `b` (:func:`select`, component by component)."""
+    return (select(condition, a[0], b[0]), select(condition, a[1], b[1]), select(condition, a[2], b[2]))

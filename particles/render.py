@@ -153,6 +153,20 @@ def _auto_limits(frames, d):
     return list(zip(lo - pad, hi + pad))
 
 
+def _check_frames(frames):
+    """The frames as float arrays, checked: at least one, each (n_k, d), all in 2D or all in 3D."""
+    frames = [np.asarray(f, dtype=float) for f in frames]
+    if not frames:
+        raise ValueError("frames must hold at least one frame (an array of positions, shape (n, d)), got none")
+    for k, f in enumerate(frames):  # a loop over frames, not particles
+        if f.ndim != 2:
+            raise ValueError(f"frames[{k}] must have 2 dimensions (positions, shape (n, d)), got shape {f.shape}")
+    d = frames[0].shape[1]
+    if d not in (2, 3) or any(f.shape[1] != d for f in frames):
+        raise ValueError(f"frames must all have shape (n_k, 2) or all (n_k, 3), got {[f.shape for f in frames]}")
+    return frames
+
+
 def animate(frames, times=None, velocities=None, blur=None, limits=None, draw=None, interval=40,
             title=None, figsize=(5, 5), color="tab:orange", size=8.0, *, colors=None, sizes=None,
             springs=None, lines=(), background=None, axis=True, view=None):
@@ -200,15 +214,8 @@ def animate(frames, times=None, velocities=None, blur=None, limits=None, draw=No
     matplotlib.animation.FuncAnimation
         Call :func:`save_gif` or :func:`to_html` on it.
     """
-    frames = [np.asarray(f, dtype=float) for f in frames]
-    if not frames:
-        raise ValueError("frames must hold at least one frame (an array of positions, shape (n, d)), got none")
-    for k, f in enumerate(frames):  # a loop over frames, not particles
-        if f.ndim != 2:
-            raise ValueError(f"frames[{k}] must have 2 dimensions (positions, shape (n, d)), got shape {f.shape}")
+    frames = _check_frames(frames)
     d = frames[0].shape[1]
-    if d not in (2, 3) or any(f.shape[1] != d for f in frames):
-        raise ValueError(f"frames must all have shape (n_k, 2) or all (n_k, 3), got {[f.shape for f in frames]}")
     if springs is not None:
         springs = _check_springs(springs, len(frames[0]))
     fig, ax = _axes(d, figsize=figsize)

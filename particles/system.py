@@ -21,7 +21,6 @@ References
 import numpy as np
 
 from ._checks import as_float_array, end_time, finite_real, pinned_indices, positive_number
-from .backends import compiled_step
 from .integrators.loop import BLOWUP_FACTOR, integrate
 from .integrators.solvers import as_stepper
 from .population import Population
@@ -171,55 +170,6 @@ class ParticleSystem(Population):
             dX[self.pinned] = 0.0
         return dX
 
-    def fused_symplectic_euler(self, X, t, h):
-        """A symplectic Euler step from X, in one compiled pass when the springs run compiled; else None.
-
-        :func:`particles.integrators.symplectic_euler` calls it when given
-        this system's :meth:`derivative` (:func:`particles.backends.compiled_step`).
-
-        Parameters
-        ----------
-        X : ndarray, shape (n, 2, d)
-            Positions (m) and velocities (m/s), float64. Not modified.
-        t, h : float
-            Time and time step, in seconds.
-
-        Returns
-        -------
-        ndarray, shape (n, 2, d), or None
-            The new state; None when no compiled step applies (then the
-            stepper takes its NumPy step).
-        """
-        step = compiled_step(self)
-        return None if step is None else step.symplectic_euler(X, t, h)
-
-    def fused_symplectic_euler_steps(self, X, times, limit):
-        """Symplectic Euler steps from ``times[0]`` to ``times[-1]`` in one compiled call, or None.
-
-        :func:`particles.integrators.integrate` calls it, through ``symplectic_euler.steps``, for
-        the steps between two recorded states of a run without hooks; see
-        :meth:`particles.backends.compiled.CompiledStep.symplectic_euler_steps`.
-
-        Parameters
-        ----------
-        X : ndarray, shape (n, 2, d)
-            Positions (m) and velocities (m/s), float64. Not modified.
-        times : ndarray, shape (K + 1,)
-            The steps' times, in seconds, increasing.
-        limit : float
-            The divergence guard: the steps stop after the first state with an
-            entry larger than `limit` in magnitude, or not finite.
-
-        Returns
-        -------
-        (ndarray, int, float) or None
-            The last state that passed, the number of steps that passed and the
-            size ``max|X|`` of the last state computed; None when no compiled
-            step applies to all the steps (then each is taken by itself).
-        """
-        step = compiled_step(self)
-        return None if step is None else step.symplectic_euler_steps(X, times, limit)
-
     def reaction_forces(self, X=None, t=None):
         """Force each pin exerts on its particle, by inverse dynamics.
 
@@ -318,8 +268,29 @@ class ParticleSystem(Population):
             return _ReusedForces(self)
         return self.derivative
 
-    def _stepper(self, method):
-        """The stepper form of `method` (see :mod:`particles.integrators.solvers`), a solver checked as ours."""
+    def stepper(self, method):
+        """The stepper a run of this system takes its steps with, for `method`.
+
+        Parameters
+        ----------
+        method : str, callable or solver
+            A key of :data:`particles.integrators.INTEGRATORS`, a stepper
+            ``step(f, X, t, h)`` (possibly wrapped by fixes) or a solver object
+            with ``step(X, t, h)`` built for this system.
+
+        Returns
+        -------
+        callable
+            ``step(f, X, t, h)`` (:func:`particles.integrators.as_stepper`). A
+            system may choose its own form of a method here, once per run
+            (:meth:`particles.massspring.MassSpringSystem.stepper`: symplectic
+            Euler as one compiled pass).
+
+        Raises
+        ------
+        ValueError
+            For an unknown name, or a solver built for another system.
+        """
         step = as_stepper(method)
         solver = getattr(step, "solver", None)
         built_for = getattr(solver, "system", self)
@@ -382,7 +353,8 @@ class ParticleSystem(Population):
             ``step(f, X, t, h)`` (called with ``f = derivative``), or a
             solver object with ``step(X, t, h)`` and ``order``
             (:class:`particles.implicit.BaraffWitkin`,
-            :class:`particles.implicit.Prefactored`), built for this system.
+            :class:`particles.implicit.Prefactored`), built for this system;
+            the run takes its steps with :meth:`stepper` of it.
         every : int
             Record every `every`-th step (first and last always recorded).
         blowup : float or None
@@ -401,7 +373,7 @@ class ParticleSystem(Population):
             replace the state (:meth:`set_state`); the next step starts from
             the system as the hooks leave it. Never assign ``system.X``. (The
             compiled step's states stay in its C-ordered rows between steps,
-            :mod:`particles.backends`; the run ends in Fortran order.)
+            :mod:`particles.massspring.compiled_step`; the run ends in Fortran order.)
         record : callable, optional
             ``record(system) -> frame``, called at every recorded time
             instead of copying the state; the run then returns the frames in
@@ -458,7 +430,7 @@ class ParticleSystem(Population):
         (2, 1)
         """
         t_end = end_time(t_end, self.t)
-        step = self._stepper(method)
+        step = self.stepper(method)
         hooks = _hook_list(between_steps)
         rhs = self._rhs(step)
         if not hooks and record is None:

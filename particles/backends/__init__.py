@@ -1,6 +1,6 @@
-"""Backends: the NumPy reference, or the same loops compiled with numba (``pip install particles[fast]``).
+"""Backends: the NumPy reference, or the same formulas compiled with numba (``pip install particles[fast]``).
 
-The library's force passes are written in NumPy, the code students read: a
+The library's passes are written in NumPy, the code students read: a
 spring force is about ten whole-array operations (gather ``x_i`` and ``x_j``,
 subtract, square, sum, square root, divide, ... scatter), each one pass over
 arrays of all the springs. A compiled loop does the same arithmetic in one
@@ -8,12 +8,21 @@ pass, spring by spring, with every value still in a register. Where memory
 traffic and not arithmetic sets the time (cloth springs, Lennard-Jones
 pairs), that is worth a factor of several (``bench/bench_backends.py``).
 
-**The switch.** Every object that has a compiled kernel takes a ``backend``
-argument (:class:`~particles.springs.Springs`,
-:class:`~particles.springs.Bending`,
-:class:`~particles.forces.lennardjones.LennardJones`,
-:class:`~particles.forces.nbody.NBodyGravity`, :class:`~particles.xpbd.XPBD`,
-:func:`~particles.xpbd.distance_pass` and :class:`~particles.implicit.Prefactored`):
+**One formula, one place.** Each per-item formula (a damped spring's force,
+a constraint's multiplier update, Provot's correction, a contact's impulse)
+is one small function of its concept's module, which the NumPy code applies
+to whole arrays and the compiled loop inlines for one item
+(:func:`particles.backends.compile.inline`). The loops live beside their
+concept, in its package's ``kernels.py`` (as Newton keeps ``kernels.py``
+beside each solver); this package holds only what all of them share, and
+imports no concept.
+
+**The switch.** Every object that has a compiled form takes a ``backend``
+argument (:class:`~particles.forces.Springs`, :class:`~particles.forces.Bending`,
+:class:`~particles.forces.LennardJones`, :class:`~particles.forces.NBodyGravity`,
+:class:`~particles.xpbd.XPBD`, :class:`~particles.constraints.ProvotConstraint`,
+:class:`~particles.collisions.Collider`, :class:`~particles.collisions.ClothCollisions`
+and :class:`~particles.implicit.Prefactored`):
 
 * ``"numpy"``: the reference code, always;
 * ``"numba"``: the compiled kernels (an error, naming the extra to install,
@@ -21,13 +30,11 @@ argument (:class:`~particles.springs.Springs`,
 * ``"auto"``: numba when it is installed and the system has at least
   :data:`AUTO_MIN` particles (a 64^2 cloth, a 4k liquid), NumPy otherwise:
   small problems (the lectures' examples, the tests) stay bit for bit those
-  of the reference and never wait for a compiler. The cloth collision
-  pipeline, whose work per vertex is that of dozens of force passes, counts
-  its vertices :data:`CLOTH_COLLISION_WEIGHT` times: it compiles from 64
-  vertices (its contacts and verdicts are NumPy's either way); XPBD and PBD,
-  whose step is its substeps' sweeps over the colour groups, count their
-  particles :data:`XPBD_WEIGHT` times: they compile from 1024 (a 32^2 sheet;
-  the lectures' 10^2 and 12^2 curtains stay on NumPy);
+  of the reference and never wait for a compiler. A concept whose work per
+  particle is that of many force passes asks with a weight: the cloth
+  collision pipeline (``particles.collisions.pipeline.CLOTH_COLLISION_WEIGHT``)
+  compiles from 64 vertices, XPBD and PBD (``particles.xpbd.solver.XPBD_WEIGHT``)
+  from 1024 particles;
 * ``None`` (the default of every object): the global choice, set by
   :func:`set_backend` or, for a block, :func:`using`; it starts as the
   environment variable ``PARTICLES_BACKEND`` (``numpy``, ``numba`` or
@@ -37,65 +44,34 @@ argument (:class:`~particles.springs.Springs`,
 so does numba's own ``NUMBA_DISABLE_JIT=1``: the grader's workers run with the
 latter (:mod:`particles.course.worker.process`), so they never import numba or need
 its cache. Should numba fail to load, ``"auto"`` falls back to NumPy (once,
-with a warning). The choice is made at each force evaluation, so
+with a warning). The choice is made at each evaluation (:func:`compiled`), so
 :func:`using` applies to objects built before it too.
 
-**Agreement.** A kernel does the operations of the NumPy code in the same
-order wherever that costs nothing (springs, bending and XPBD give the same
-bits as NumPy), and sums per particle in a fixed order what NumPy scatters
-with ``np.bincount``, so the two agree to about 1e-15 relative (tested to
-1e-12 on every problem of the force contract,
-``tests/library/backends/test_force_contract.py``, and on larger ones,
-``tests/library/backends/test_compiled.py``).
+**Agreement.** A kernel computes its laws with the NumPy code's functions and
+sums per particle in a fixed order what NumPy scatters with ``np.bincount``,
+so the two agree to about 1e-15 relative (tested to 1e-12 on every problem of
+the force contract, ``tests/library/forces/test_force_contract.py``, and on
+larger ones beside each concept's tests).
 
 **Determinism and threads.** Loops of 4096 items or more run on numba's
 threads (``NUMBA_NUM_THREADS``, or :func:`numba.set_num_threads`); shorter
 ones on one. The result has the same bits for any number of threads: each
 output (a particle's force, a constraint's correction) is written by one
 thread, as a sum in a fixed order, through a per-particle incidence list in
-compressed-row form (for Lennard-Jones, per block of particles, a number
-that depends on the system only) rather than with atomic additions; totals
-(the virial) are summed after the parallel loop. Springs have two forms with
-the same bits: a one-pass scatter on one thread, and forces per spring in
-parallel then a per-particle gather, which moves more memory and is used
-from four threads on. Unless ``NUMBA_THREADING_LAYER`` says otherwise, the
-threads are GNU OpenMP's (numba's work queue where OpenMP does not load),
-with their wait between two parallel loops bounded by ``GOMP_SPINCOUNT=10000``
-(``bench/bench_threads.py``): the work queue took 17 to 38 us to start a
-parallel loop and woke its second thread too late to halve a 0.2 ms loop,
-OpenMP starts one in 2 to 7 us and halves it; OpenMP's default wait, a spin
-of milliseconds, once made an XPBD substep (a parallel loop per colour) a
-hundred times slower beside another process doing the same on a 2-core
-machine.
-GNU OpenMP is not fork-safe: a process forked (not spawned) from one that
-ran a parallel loop must not run one itself (numba stops it with
-"Terminating: fork() called from a process already using GNU OpenMP");
-set ``NUMBA_THREADING_LAYER=workqueue`` for such a program.
+compressed-row form (:func:`particles.backends.layout.incidence`; for
+Lennard-Jones, per block of particles, a number that depends on the system
+only) rather than with atomic additions; totals (the virial) are summed after
+the parallel loop. The threads and their layer are set in
+:mod:`particles.backends.compile`. GNU OpenMP is not fork-safe: a process
+forked (not spawned) from one that ran a parallel loop must not run one
+itself (numba stops it with "Terminating: fork() called from a process
+already using GNU OpenMP"); set ``NUMBA_THREADING_LAYER=workqueue`` for such
+a program.
 
-**The compiled step.** A force pass is only part of a step: around it the
-NumPy symplectic Euler step zeroes the force array, divides by the masses,
-clears the pins, and makes the new velocities and positions, each one more
-pass over all particles, and the per-force kernels read the state in the
-system's Fortran order, each coordinate of all particles together. When a
-system's springs run compiled, :func:`~particles.integrators.symplectic_euler`
-given the system's ``derivative`` (in :meth:`particles.ParticleSystem.run`,
-inside a wrapper such as Provot's constraint or a collider, or called
-directly) takes the whole step from :func:`compiled_step`, one parallel pass
-over blocks of particles (:mod:`particles.backends._step_kernels`): each
-block reads the particles its springs touch from the state's rows ``(x, v)``
-(a state in Fortran order is copied to C order once, before the first
-step), computes its springs and bending joints, adds air damping, wind and gravity, and
-updates its own particles; clamps have a kernel of their own
-(:attr:`~particles.forces.fields.Force.compiled_role` says what each force is).
-Provot's pass and a collider's fix run compiled after the step, in place
-(:mod:`particles.backends.fixes`). A force without a compiled form is added
-by its own ``add_to`` with ``"numba"``; with ``"auto"`` the system keeps the
-NumPy step (NumPy's loops over the compiled step's C-ordered rows would be
-slower than the NumPy step). It agrees with the NumPy step to rounding, has
-the same bits on any number of threads, and is what ``bench/bench_backends.py``
-times against Warp (``bench/bench_builders.py``: the builders'
-configurations). With the NumPy backend (or below :data:`AUTO_MIN`
-particles on ``"auto"``) the step is the slide's, bit for bit.
+**The compiled step.** A mass-spring system's symplectic Euler step can run
+in one compiled pass (:mod:`particles.massspring.compiled_step`): chosen once,
+where the system runs (:meth:`particles.massspring.MassSpringSystem.stepper`),
+never inside the generic stepper.
 
 **Why numba.** It compiles plain Python loops over NumPy arrays, so the
 kernel reads as the slide's loop, with the same names; it ships as wheels
@@ -108,27 +84,15 @@ dependency. ``bench/bench_backends.py`` times Warp's and Taichi's CPU
 backends beside numba when they are installed (extra ``[bench]``).
 
 **Compile cache.** Kernels are compiled on first use (seconds) and cached on
-disk (``cache=True``) in ``NUMBA_CACHE_DIR`` if it is set, else in
-``~/.cache/particles/numba`` (or ``$XDG_CACHE_HOME/particles/numba``, or a
-folder of the temporary directory): never inside the package, which may be
-read-only and whose files the grader checksums. With no writable place,
-kernels are compiled in memory, once per process. ``bench/bench_backends.py``
-reports the compile time and the cached load time apart from the run times.
+disk (:mod:`particles.backends.compile`); ``particles warm``
+(:mod:`particles.warm`) compiles them all ahead of use.
 
 Modules
 -------
-* :mod:`particles.backends.compiled`: the numba drivers, one per compiled force, and the compiled step;
-* :mod:`particles.backends.xpbdstep`: the compiled XPBD substep;
-* :mod:`particles.backends.warm`: every compiled path run once on small systems, so that the kernels are
-  compiled into the disk cache ahead of use (``particles warm``, which ``make test`` runs first);
-* :mod:`particles.backends.fixes`: Provot's pass and the collider as compiled fixes of a step's end state;
-* :mod:`particles.backends.factored`: the prefactorized implicit solver's local step, triangular solves
-  over its kept factorization and residual (:class:`~particles.implicit.Prefactored` with ``backend=``);
-* :mod:`particles.backends.cloth`: the cloth collision pipeline's broad phase, proximity impulses and
-  continuous test, compiled (the same contacts and verdicts as NumPy);
-* ``_kernels.py``, ``_step_kernels.py``, ``_pbd_kernels.py``, ``_provot_kernels.py``,
-  ``_collider_kernels.py``, ``_factored_kernels.py``, ``_broad_kernels.py``, ``_contact_kernels.py``,
-  ``_jacobi_kernels.py``, ``_body_kernels.py``: the numba loops they call (private to the package).
+* :mod:`particles.backends.compile`: the compile wrapper (:func:`~particles.backends.compile.jit`,
+  :func:`~particles.backends.compile.inline`), numba's threads and the cache;
+* :mod:`particles.backends.layout`: the layouts the kernels share (compressed-row incidence lists, a state
+  in C order, work arrays kept between calls).
 
 Examples
 --------
@@ -145,28 +109,14 @@ import importlib.util
 import os
 import warnings
 
-__all__ = ["BACKENDS", "AUTO_MIN", "CLOTH_COLLISION_WEIGHT", "XPBD_WEIGHT", "available", "check_backend", "resolve",
-           "set_backend", "get_backend", "using", "kernels_for", "compiled_step"]
+__all__ = ["BACKENDS", "AUTO_MIN", "available", "check_backend", "resolve", "compiled", "set_backend",
+           "get_backend", "using"]
 
 BACKENDS = ("auto", "numpy", "numba")
 
 # "auto" compiles for systems of this many particles or more: below, a NumPy force pass costs about a
 # millisecond or less, and loading the compiled code (a fraction of a second) would cost more than it saves
 AUTO_MIN = 4096
-
-# the cloth collision pipeline (particles.collisions.ClothCollisions) asks "auto" with this many times its
-# vertices: each vertex carries dozens of force passes' work (its candidate pairs' closest points, up to 50
-# Jacobi iterations, the continuous test), and NumPy's calls cost the same whatever the sheet. Measured with
-# bench/bench_cloth_fold.py --compare (median ms per step, NumPy / compiled): 8^2 6.3 / 1.3, 16^2 18.6 / 2.8,
-# 32^2 about 60 / 8: compiled from 64 vertices
-CLOTH_COLLISION_WEIGHT = 64
-
-# XPBD and PBD (particles.xpbd) ask "auto" with this many times their particles: a step is its substeps' sweeps
-# over the colour groups, a few dozen NumPy calls each. `python bench/bench_cloth_fold.py --xpbd-sizes` (the
-# fold's sheet, 10 substeps, ms per step, NumPy / compiled, 2026-12-06): 8^2 1.92 / 0.33, 16^2 2.48 / 0.50,
-# 24^2 3.46 / 0.77, 32^2 4.46 / 1.17, 48^2 8.28 / 2.32, 64^2 12.22 / 3.97. Compiled from 1024 particles: a 32^2
-# sheet, not the lectures' curtains (10^2 and 12^2), which stay bit for bit the reference's
-XPBD_WEIGHT = 4
 
 ENVIRONMENT = "PARTICLES_BACKEND"
 
@@ -263,56 +213,30 @@ def resolve(backend, size):
     return choice
 
 
-def kernels_for(backend, size):
-    """The compiled kernels (:mod:`particles.backends.compiled`) if `backend` resolves to numba, else None.
+def compiled(backend, size):
+    """Whether a pass over `size` particles runs compiled, for an object's `backend` option.
 
-    The force modules call it at each evaluation; numba is imported only here,
-    at the first pass that uses it, never by ``import particles``.
+    An object with a compiled form asks at each evaluation; when the answer
+    is True it imports its own kernels (its package's ``kernels.py``), which
+    import numba: ``import particles`` never does.
+
+    Returns
+    -------
+    bool
+        True when `backend` resolves to numba (:func:`resolve`) and numba
+        loads. With ``"auto"``, a numba that cannot be loaded (a broken
+        install, a sandbox) gives False, with a warning, from then on; with
+        ``"numba"`` its error is raised.
     """
     if resolve(backend, size) != "numba":
-        return None
+        return False
     try:
-        from . import compiled  # noqa: PLC0415  (imports numba)
-    except Exception as error:  # numba installed but unusable (a broken install, a sandbox)
+        from . import compile  # noqa: F401, PLC0415  (numba and its settings)
+    except Exception as error:
         if (get_backend() if backend is None else backend) != "auto":
             raise
         _state["broken"] = True
         warnings.warn(f"backend 'auto': numba could not be loaded ({error}); using NumPy", RuntimeWarning,
                       stacklevel=3)
-        return None
-    return compiled
-
-
-def compiled_step(system):
-    """`system`'s compiled symplectic Euler step when its springs run compiled, or None.
-
-    :meth:`particles.ParticleSystem.fused_symplectic_euler` calls it at each
-    step: :func:`~particles.integrators.symplectic_euler` given the system's
-    ``derivative`` (by :meth:`particles.ParticleSystem.run`, by a wrapper such
-    as Provot's or a collider, or directly) then takes the whole step in one
-    compiled pass (:class:`particles.backends.compiled.CompiledStep`).
-
-    Returns
-    -------
-    CompiledStep or None
-        None unless the system has one to three
-        :class:`~particles.springs.Springs` sets (``compiled_role ==
-        "springs"``), in 2D or 3D, and all of them resolve to numba for the
-        system's size. Nothing imports numba otherwise.
-    """
-    springs = [f for f in system.forces if getattr(f, "compiled_role", None) == "springs"]
-    if not springs or not _all_compiled(springs, system.n):
-        return None
-    from .compiled import CompiledStep  # noqa: PLC0415  (loaded by _all_compiled already)
-    step = CompiledStep(system, _all_compiled, _automatic)
-    return step if step.parts(system.n) is not None else None
-
-
-def _all_compiled(forces, n):
-    """Whether every one of `forces` runs on the compiled kernels for `n` particles (each by its ``_backend``)."""
-    return all(kernels_for(backend, n) is not None for backend in {f._backend for f in forces})
-
-
-def _automatic(forces):
-    """Whether one of `forces` leaves the choice to ``"auto"`` (its own ``_backend`` or the global choice)."""
-    return any((get_backend() if f._backend is None else f._backend) == "auto" for f in forces)
+        return False
+    return True

@@ -2,7 +2,7 @@
 
 
 def run(args):
-    from ..backends.warm import command
+    from ..warm import command
 
     return command(args.jobs)
 

@@ -10,7 +10,8 @@ that a thin body does not slip between two vertices. :class:`BodyStage` holds th
 
 import numpy as np
 
-from ..backends import CLOTH_COLLISION_WEIGHT, kernels_for
+from .candidate_cache import compiled_stages
+from .response import friction_change
 from .proximity import dot
 
 __all__ = ["EDGE_SAMPLES", "StaticBody", "BodyStage"]
@@ -36,7 +37,7 @@ class BodyStage:
     """The body stages of :class:`~particles.collisions.pipeline.ClothCollisions` (a base class of it).
 
     They use its ``mesh``, ``n``, ``w`` (inverse masses), ``thickness``, ``friction``, ``bodies``, ``backend``
-    and ``_scatter``. Compiled (:func:`particles.backends.cloth.cloth_body_vertices`) when every body is a
+    and ``_scatter``. Compiled (:func:`particles.collisions.compiled_stages.cloth_body_vertices`) when every body is a
     primitive at rest; an edge sample that comes too close is then treated by the NumPy pass.
     """
 
@@ -78,7 +79,7 @@ class BodyStage:
 
     def _compiled_bodies(self):
         """The compiled kernels and the bodies' table when they run compiled (all primitives at rest), else None's."""
-        fast = kernels_for(self.backend, CLOTH_COLLISION_WEIGHT * self.n)
+        fast = compiled_stages(self.backend, self.n)
         if fast is None or not all(type(b) is StaticBody for b in self.bodies):
             return None, None
         return fast, fast.surface_rows([b.surface for b in self.bodies])
@@ -92,7 +93,7 @@ class BodyStage:
             u = vbar[idx] - np.asarray(body.velocity(p, t1), dtype=float)
             ut = u - dot(u, n)[:, None] * n
             speed = np.sqrt(dot(ut, ut))
-            slow = np.minimum(self.friction * dn, speed)
+            slow = friction_change(self.friction, dn, speed)
             vbar[idx] -= np.divide(slow, speed, out=np.zeros_like(speed), where=speed > 0)[:, None] * ut
 
     def _edges_out(self, body, surface, x0, vbar, t, h):

@@ -3,17 +3,17 @@
 The box swept by each vertex, face and edge over a step, inflated by a pad, is put in the bucket grid of
 :func:`particles.collisions.triangle_crossing.box_pairs`; only pairs whose boxes overlap go on to the
 narrow phase (:mod:`particles.collisions.proximity`, :mod:`particles.collisions.ccd`). Pairs that share a
-vertex touch by construction and are left out. :class:`CandidateCache` keeps the pairs from step to step,
-as a Verlet list keeps neighbours, for the pipeline of :mod:`particles.collisions.pipeline`.
+vertex touch by construction and are left out. :class:`~particles.collisions.candidate_cache.CandidateCache`
+keeps the pairs from step to step, as a Verlet list keeps neighbours, for the pipeline of :mod:`particles.collisions.pipeline`
+(:mod:`particles.collisions.candidate_cache`).
 """
 
 import numpy as np
 
-from ..backends import CLOTH_COLLISION_WEIGHT, check_backend, kernels_for
-from .triangle_crossing import box_pairs
+from .triangle_crossing import box_pairs, intervals_overlap
 
 __all__ = ["element_boxes", "candidate_elements", "candidates_in_boxes", "pair_rows", "candidate_pairs",
-           "boxes_overlap", "candidates_touching", "merge_keys", "CandidateCache"]
+           "boxes_overlap", "candidates_touching", "merge_keys"]
 
 
 def _boxes(x0, x1, index, pad):
@@ -88,7 +88,7 @@ def candidate_pairs(mesh, x0, x1, pad, vertices=None):
 def boxes_overlap(boxes_a, boxes_b, ia, ib):
     """Whether boxes ``ia`` of one set overlap boxes ``ib`` of another (each set a pair ``(lo, hi)``)."""
     (lo_a, hi_a), (lo_b, hi_b) = boxes_a, boxes_b
-    return np.all((lo_a[ia] <= hi_b[ib]) & (lo_b[ib] <= hi_a[ia]), axis=1)
+    return np.all(intervals_overlap(lo_a[ia], hi_a[ia], lo_b[ib], hi_b[ib]), axis=1)
 
 
 def _overlap_matrix(lo_a, hi_a, lo_b, hi_b):
@@ -97,7 +97,7 @@ def _overlap_matrix(lo_a, hi_a, lo_b, hi_b):
     step = max(1, 2_000_000 // max(len(lo_b), 1))
     for s in range(0, len(lo_a), step):  # a loop over chunks of a few rows
         la, ha = lo_a[s:s + step, None, :], hi_a[s:s + step, None, :]
-        ok = np.all((la <= hi_b[None]) & (lo_b[None] <= ha), axis=2)
+        ok = np.all(intervals_overlap(la, ha, lo_b[None], hi_b[None]), axis=2)
         i, j = np.nonzero(ok)
         I.append(i + s)
         J.append(j)
@@ -122,114 +122,3 @@ def merge_keys(keys, new):
     inside = pos < len(keys)
     present[inside] = keys[pos[inside]] == new[inside]
     return np.insert(keys, pos[~present], new[~present])
-
-
-class CandidateCache:
-    """Candidate pairs of a mesh kept from step to step, searched again only when a vertex left its box.
-
-    The pairs are searched with the boxes of each vertex's motion, padded by ``thickness / 2 + SKIN
-    thickness``, and searched again only when a vertex left its box by more than ``SKIN thickness - eta``.
-    Contacts depend on relative motion only, so boxes are compared in a frame that follows the median
-    displacement (a falling sheet's boxes do not grow with its fall). When only a few vertices left their
-    boxes (at most ``max(FEW, n / 16)``), their boxes grow and they alone are searched again, against
-    every box. With the compiled backend each call searches its own boxes instead (the same pairs), and a
-    call without a mask whose padded boxes lie within those of the last such call filters that call's
-    pairs (in a step, the continuous test's first search within the proximity search's boxes; ``memo``
-    of :func:`particles.backends.cloth.cloth_candidate_rows`).
-
-    Parameters
-    ----------
-    mesh : TriangleMesh
-        The cloth's faces and edges.
-    thickness : float
-        The cloth's thickness, in metres.
-    eta : float
-        The narrow phase's tolerance, in metres.
-    backend : {None, "auto", "numpy", "numba"}
-        Who searches and filters the pairs (:mod:`particles.backends`): NumPy, or the compiled grid of
-        :func:`particles.backends.cloth.cloth_candidates` (the same pairs).
-
-    Attributes
-    ----------
-    searches : int
-        Full searches made so far (the other steps reused or grew the cached pairs).
-    """
-
-    SKIN = 0.5
-    FEW = 64  # up to this many vertices out of their boxes: a search around them only
-
-    def __init__(self, mesh, thickness, eta, backend=None):
-        self.mesh, self.thickness, self.eta = mesh, thickness, eta
-        self.backend = check_backend(backend)
-        self.x0 = self.lo = self.hi = None  # start of the search, the vertices' boxes (in its frame)
-        self.vf = self.ee = None  # sorted keys iv m + jf and ie e + je of the cached pairs
-        self.searches = 0
-        self.memo = {}  # the compiled backend's last search without a mask (see cloth_candidate_rows)
-
-    def frame(self, x0, dx):
-        """Start and end of each vertex's motion in the frame of the cache (a common translation removed)."""
-        offset = np.median(x0 - self.x0, axis=0) if self.x0 is not None else np.zeros(3)
-        return x0 - offset, x0 + dx - np.median(dx, axis=0) - offset
-
-    def update(self, x0, dx, search=True):
-        """Make the cached candidates cover the motion x0 -> x0 + dx; returns its start and end in their frame.
-
-        Without `search`, only the frame and the boxes are kept up to date (the compiled :meth:`pairs`
-        searches the step's own boxes, which gives the same pairs), and the cached pairs are dropped.
-        """
-        mesh = self.mesh
-        pad = (0.5 + self.SKIN) * self.thickness
-        if search and self.vf is None:  # no pairs cached (the compiled backend ran): search anew
-            self.x0 = None
-        if self.x0 is not None and self.x0.shape == x0.shape:
-            a, b = self.frame(x0, dx)
-            lo, hi = self.lo, self.hi
-            out = np.maximum(np.maximum(lo - a, a - hi), np.maximum(lo - b, b - hi)).max(axis=1)
-            far = out > self.SKIN * self.thickness - self.eta
-            if not far.any():
-                return a, b
-            if far.sum() <= max(self.FEW, mesh.n // 16):  # grow those vertices' boxes, test them against every box
-                lo[far] = np.minimum(lo[far], np.minimum(a[far], b[far]))
-                hi[far] = np.maximum(hi[far], np.maximum(a[far], b[far]))
-                if not search:
-                    return a, b
-                iv, jf, ie, je = candidates_touching(mesh, lo, hi, pad, far)
-                self.vf = merge_keys(self.vf, iv * mesh.m + jf)
-                self.ee = merge_keys(self.ee, ie * len(mesh.edges) + je)
-                return a, b
-        self.x0 = None
-        a, b = self.frame(x0, dx)
-        lo, hi = np.minimum(a, b), np.maximum(a, b)
-        self.x0, self.lo, self.hi = x0.copy(), lo, hi
-        self.searches += 1
-        if not search:
-            self.vf = self.ee = None
-            return a, b
-        iv, jf, ie, je = candidates_in_boxes(mesh, lo, hi, pad)
-        self.vf, self.ee = iv * mesh.m + jf, ie * len(mesh.edges) + je
-        return a, b
-
-    def pairs(self, x0, dx, pad, moved=None):
-        """Cached candidate rows whose boxes, swept over x0 -> x0 + dx, overlap when padded by `pad` / 2 each.
-
-        With a mask `moved` (shape (n,)), only the pairs that hold one of those vertices. Returns the
-        vertex-face rows ``(vertex, a, b, c)`` and the edge-edge rows ``(p_1, p_2, q_1, q_2)``.
-        """
-        mesh = self.mesh
-        fast = kernels_for(self.backend, CLOTH_COLLISION_WEIGHT * mesh.n)
-        a, b = self.update(x0, dx, search=fast is None)
-        if fast is not None:  # compiled: a search with the step's own boxes finds the pairs the cache would give
-            return fast.cloth_candidate_rows(mesh, np.minimum(a, b), np.maximum(a, b), 0.5 * pad, moved, self.memo)
-        iv, jf = np.divmod(self.vf, max(mesh.m, 1))
-        ie, je = np.divmod(self.ee, max(len(mesh.edges), 1))
-        if moved is not None:
-            F, E = mesh.faces, mesh.edges
-            keep = moved[iv] | moved[F[jf]].any(axis=1)
-            iv, jf = iv[keep], jf[keep]
-            keep = moved[E[ie]].any(axis=1) | moved[E[je]].any(axis=1)
-            ie, je = ie[keep], je[keep]
-        vb, fb, eb = element_boxes(mesh, a, b, 0.5 * pad)
-        keep = boxes_overlap(vb, fb, iv, jf)
-        iv, jf = iv[keep], jf[keep]
-        keep = boxes_overlap(eb, eb, ie, je)
-        return pair_rows(mesh, iv, jf, ie[keep], je[keep])

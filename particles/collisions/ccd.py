@@ -59,10 +59,11 @@ import numpy as np
 from .._checks import as_float_array, nonnegative_number, positive_number
 from .candidates import candidate_pairs
 from .mesh import TriangleMesh
+from .._vectors import any_of, select, vcross, vdot, vselect, vsub
 from .proximity import PARALLEL, dot, edge_edge_kernel, unit_or, vertex_face_kernel
 
 __all__ = ["cubic_roots", "coplanarity_cubic", "Impacts", "candidates", "overlapping", "first_contact", "detect",
-           "BISECTIONS", "F_TOL"]
+           "BISECTIONS", "F_TOL", "cubic_of", "bernstein", "cubic_unit_roots", "piece_root", "impact_normal"]
 
 # Kernels without the checks, for the collision stages that call them on every step.
 
@@ -74,67 +75,110 @@ F_TOL = 1e-12
 """Relative tolerance of the cubic: ``|f| <= F_TOL L^3`` counts as zero, ``L`` the pair's largest coordinate span."""
 
 
-def _triple(u, v, w):
-    return np.einsum("ij,ij->i", u, np.cross(v, w))
+def triple(u, v, w):
+    """The triple product ``[u v w] = u . (v x w)`` of 3-tuples."""
+    return vdot(u, vcross(v, w))
 
 
-def cubic_coefficients(x, dx):
-    p = [x[:, i] - x[:, 0] for i in (1, 2, 3)]
-    q = [dx[:, i] - dx[:, 0] for i in (1, 2, 3)]
-    d = _triple(p[0], p[1], p[2])
-    c = _triple(q[0], p[1], p[2]) + _triple(p[0], q[1], p[2]) + _triple(p[0], p[1], q[2])
-    b = _triple(q[0], q[1], p[2]) + _triple(q[0], p[1], q[2]) + _triple(p[0], q[1], q[2])
-    a = _triple(q[0], q[1], q[2])
-    return np.stack([a, b, c, d], axis=1)
+def cubic_of(p1, p2, p3, q1, q2, q3):
+    """``a, b, c, d`` of the coplanarity cubic ``f(t) = [p_1 + t q_1, p_2 + t q_2, p_3 + t q_3]`` (3-tuples).
+
+    ``p_i = x_i - x_0`` and ``q_i = dx_i - dx_0``: ``d = [p_1 p_2 p_3]``,
+    ``c = [q_1 p_2 p_3] + [p_1 q_2 p_3] + [p_1 p_2 q_3]``, ``b = [q_1 q_2 p_3] + [q_1 p_2 q_3] + [p_1 q_2 q_3]``,
+    ``a = [q_1 q_2 q_3]``.
+    """
+    d = triple(p1, p2, p3)
+    c = triple(q1, p2, p3) + triple(p1, q2, p3) + triple(p1, p2, q3)
+    b = triple(q1, q2, p3) + triple(q1, p2, q3) + triple(p1, q2, q3)
+    return triple(q1, q2, q3), b, c, d
 
 
-def _horner(coef, t):
-    a, b, c, d = (coef[..., k] for k in range(4))
+def bernstein(a, b, c, d):
+    """The cubic's Bernstein coefficients on [0, 1]: all of one sign, no root there."""
+    return d, d + c / 3.0, d + (2.0 * c + b) / 3.0, d + c + b + a
+
+
+def horner(a, b, c, d, t):
+    """``((a t + b) t + c) t + d``."""
     return ((a * t + b) * t + c) * t + d
 
 
-def unit_roots(coef, ftol):
-    k = len(coef)
-    a, b, c = coef[:, 0], coef[:, 1], coef[:, 2]
-    # critical points: 3 a t^2 + 2 b t + c = 0, in closed form (the stable quadratic formula)
-    A, B, C = 3.0 * a, 2.0 * b, c
-    disc = B * B - 4.0 * A * C
-    crit = np.full((k, 2), np.nan)
-    quad = (A != 0) & (disc >= 0)
-    sq = np.sqrt(np.where(quad, disc, 0.0))
-    qq = -0.5 * (B + np.where(B >= 0, sq, -sq))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        crit[:, 0] = np.where(quad, qq / np.where(A != 0, A, 1.0), np.nan)
-        crit[:, 1] = np.where(quad & (qq != 0), C / np.where(qq != 0, qq, 1.0), np.nan)
-    lin = (A == 0) & (B != 0)
-    crit[lin, 0] = -C[lin] / B[lin]
-    crit = np.where((crit > 0) & (crit < 1), crit, np.nan)
-    crit = np.sort(crit, axis=1)  # nan last
-    ends = np.concatenate([np.zeros((k, 1)), crit, np.ones((k, 1))], axis=1)  # (k, 4), nan for unused cuts
-    # pieces [ends_j, next non-nan end]: fill the nan cuts with the next end (empty pieces)
-    ends[:, 2] = np.where(np.isnan(ends[:, 2]), 1.0, ends[:, 2])
-    ends[:, 1] = np.where(np.isnan(ends[:, 1]), ends[:, 2], ends[:, 1])
-    lo, hi = ends[:, :3], ends[:, 1:]
-    flo, fhi = _horner(coef[:, None, :], lo), _horner(coef[:, None, :], hi)
-    tol = ftol[:, None]
+def piece_root(a, b, c, d, lo, hi, tol, bisections):
+    """The root of the cubic on a monotone piece ``[lo, hi]``: an end within `tol` of zero, or the bisected sign
+    change (nan when there is none, or the piece is empty)."""
+    flo, fhi = horner(a, b, c, d, lo), horner(a, b, c, d, hi)
     zlo, zhi = np.abs(flo) <= tol, np.abs(fhi) <= tol
     used = hi > lo
-    sign_change = used & (np.sign(flo) * np.sign(fhi) < 0) & ~zlo & ~zhi
-    roots = np.full((k, 3), np.nan)
-    roots = np.where(used & zlo, lo, roots)
-    roots = np.where(used & ~zlo & zhi, hi, roots)
-    r, j = np.nonzero(sign_change)
-    if len(r):
-        L, H = lo[r, j].copy(), hi[r, j].copy()
-        cf = coef[r]
-        up = _horner(cf, L) < 0  # f increases from L to H on this piece
-        for _ in range(BISECTIONS):  # a loop over bisection steps (all pieces at once)
-            mid = 0.5 * (L + H)
-            below = (_horner(cf, mid) < 0) == up  # the root lies above mid
-            L = np.where(below, mid, L)
-            H = np.where(below, H, mid)
-        roots[r, j] = 0.5 * (L + H)
-    return np.sort(roots, axis=1)
+    change = used & (np.sign(flo) * np.sign(fhi) < 0) & ~zlo & ~zhi
+    L, H = lo, hi
+    up = flo < 0  # f increases from lo to hi on this piece
+    for _ in range(bisections if any_of(change) else 0):  # bisection steps (in NumPy, all pieces at once)
+        mid = 0.5 * (L + H)
+        below = (horner(a, b, c, d, mid) < 0) == up  # the root lies above mid
+        L, H = select(below, mid, L), select(below, H, mid)
+    return select(used & zlo, lo, select(used & zhi, hi, select(change, 0.5 * (L + H), np.nan)))
+
+
+def sorted_nan_last(r0, r1, r2):
+    """Three numbers ascending, nan last."""
+    swap = (r1 < r0) | (np.isnan(r0) & ~np.isnan(r1))
+    r0, r1 = select(swap, r1, r0), select(swap, r0, r1)
+    swap = (r2 < r1) | (np.isnan(r1) & ~np.isnan(r2))
+    r1, r2 = select(swap, r2, r1), select(swap, r1, r2)
+    swap = (r1 < r0) | (np.isnan(r0) & ~np.isnan(r1))
+    return select(swap, r1, r0), select(swap, r0, r1), r2
+
+
+def cubic_unit_roots(a, b, c, d, tol, bisections):
+    """Roots in [0, 1] of ``a t^3 + b t^2 + c t + d``, one per monotone piece, ascending (nan for none).
+
+    [0, 1] is split at the roots of ``f'`` (a quadratic, in closed form: the stable formula), where ``f``
+    is monotone on every piece; each piece gives :func:`piece_root`.
+    """
+    A, B, C = 3.0 * a, 2.0 * b, c
+    disc = B * B - 4.0 * A * C
+    quad = (A != 0) & (disc >= 0)
+    sq = np.sqrt(select(quad, disc, 0.0))
+    qq = -0.5 * (B + select(B >= 0, sq, -sq))
+    c0 = select(quad, qq / select(A != 0, A, 1.0), np.nan)
+    c1 = select(quad & (qq != 0), C / select(qq != 0, qq, 1.0), np.nan)
+    c0 = select((A == 0) & (B != 0), -C / select(B != 0, B, 1.0), c0)
+    c0 = select((c0 > 0) & (c0 < 1), c0, np.nan)
+    c1 = select((c1 > 0) & (c1 < 1), c1, np.nan)
+    swap = (c1 < c0) | (np.isnan(c0) & ~np.isnan(c1))
+    c0, c1 = select(swap, c1, c0), select(swap, c0, c1)
+    e2 = select(np.isnan(c1), 1.0, c1)
+    e1 = select(np.isnan(c0), e2, c0)
+    return sorted_nan_last(piece_root(a, b, c, d, 0.0, e1, tol, bisections),
+                           piece_root(a, b, c, d, e1, e2, tol, bisections),
+                           piece_root(a, b, c, d, e2, 1.0, tol, bisections))
+
+
+def impact_normal(u, v, fallback):
+    """The normal of an impact: ``u x v`` normalized (a face's, or two edges' ``d_1 x d_2``), else `fallback`.
+
+    `u`, `v`, `fallback` are 3-tuples; ``u x v`` counts only when ``|u x v|^2 > 1e-12 |u|^2 |v|^2``.
+    """
+    nrm = vcross(u, v)
+    big = vdot(nrm, nrm) > 1e-12 * vdot(u, u) * vdot(v, v)
+    return vselect(big, unit_or(nrm, fallback), fallback)
+
+
+def _points(x, j):
+    """Point j of every pair of `x` (k, 4, 3), as a 3-tuple of contiguous arrays."""
+    t = np.ascontiguousarray(x[:, j].T)
+    return t[0], t[1], t[2]
+
+
+def cubic_coefficients(x, dx):
+    p = [vsub(_points(x, i), _points(x, 0)) for i in (1, 2, 3)]
+    q = [vsub(_points(dx, i), _points(dx, 0)) for i in (1, 2, 3)]
+    return np.stack(cubic_of(*p, *q), axis=1)
+
+
+def unit_roots(coef, ftol):
+    a, b, c, d = (coef[:, k] for k in range(4))
+    return np.stack(cubic_unit_roots(a, b, c, d, ftol, BISECTIONS), axis=1)
 
 
 @dataclass(frozen=True)
@@ -188,14 +232,11 @@ def _closest(pts, edge):
 
 
 def _geometric_normal(pts, edge, fallback):
-    """The face's normal, or ``d_1 x d_2`` of two edges; `fallback` where it is not defined."""
-    if edge:
-        u, v = pts[:, 1] - pts[:, 0], pts[:, 3] - pts[:, 2]
-    else:
-        u, v = pts[:, 2] - pts[:, 1], pts[:, 3] - pts[:, 1]
-    nrm = np.cross(u, v)
-    big = dot(nrm, nrm) > 1e-12 * dot(u, u) * dot(v, v)
-    return np.where(big[:, None], unit_or(nrm, fallback), fallback)
+    """The face's normal, or ``d_1 x d_2`` of two edges (:func:`impact_normal`); `fallback` where it is not defined."""
+    i, j, k = (0, 1, 2) if edge else (1, 2, 1)
+    u = vsub(_points(pts, j), _points(pts, i))
+    v = vsub(_points(pts, 3), _points(pts, k))
+    return np.stack(impact_normal(u, v, tuple(fallback.T)), axis=1)
 
 
 def first_contacts(x, dx, edge, eta):
@@ -207,8 +248,7 @@ def first_contacts(x, dx, edge, eta):
     L = np.abs(rel).max(axis=(1, 2))
     ftol = F_TOL * L ** 3
     # Bernstein coefficients on [0, 1]: all of one sign beyond ftol -> no root
-    a, b, c, d = coef.T
-    bern = np.stack([d, d + c / 3.0, d + (2.0 * c + b) / 3.0, d + c + b + a], axis=1)
+    bern = np.stack(bernstein(*coef.T), axis=1)
     maybe = ~((bern > ftol[:, None]).all(axis=1) | (bern < -ftol[:, None]).all(axis=1))
     rows = np.flatnonzero(maybe)
     roots = unit_roots(coef[rows], ftol[rows])
@@ -266,7 +306,7 @@ def detect_pairs(x0, dx, vf, ee, eta, fast=None):
     """:func:`particles.collisions.ccd.detect` on given candidate pairs (with `fast`, the compiled kernels)."""
     found = []
     for idx, edge in ((vf, False), (ee, True)):  # the two kinds of pairs
-        if fast is not None:  # pair by pair, compiled (particles.backends.cloth)
+        if fast is not None:  # pair by pair, compiled (particles.collisions.compiled_stages)
             rows, W, N, T = fast.cloth_first_contacts(x0, dx, idx, edge, eta, F_TOL, BISECTIONS, PARALLEL)
             found.append(Impacts(rows, W, N, T, np.full(len(T), edge)))
             continue

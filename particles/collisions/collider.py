@@ -45,87 +45,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import (as_float_array, mass_array, nonnegative_number, pinned_indices, positive_number,
-                       restitution_coefficient)
+from .._checks import as_float_array, mass_array, nonnegative_number, pinned_indices, positive_number
+from .._checks import restitution_coefficient
 from .._vectors import rowdot
-from ..backends import check_backend, kernels_for
+from ..backends import check_backend, compiled
 from ..integrators.solvers import after
+from .response import response
 from .surface_crossing import cubic_path, first_crossing, hermite, hermite_coefficients, path_speed
-from .surfaces import Box, Complement, Cylinder, Intersection, Plane, Sphere, Surface, Union
+from .surfaces import Box, Cylinder, Plane, Sphere, Surface
 
-__all__ = [
-    "Plane", "Sphere", "Box", "Union", "Intersection", "Complement", "Surface",
-    "respond", "Contacts", "Collider",
-]
+__all__ = ["Contacts", "Collider"]
 
 METHODS = ("project", "backtrack")
-UNIT_TOL = 1e-9
-"""Largest accepted ``| |n| - 1 |`` for the unit normals given to :func:`respond`."""
 ROUNDOFF_DEPTH = 1e-12
 """Depth (m) below which a particle that gets no impulse counts as on the surface, not in contact."""
 _PRIMITIVES = (Plane, Sphere, Box, Cylinder)  # their normal at a point inside points to its closest point
-
-
-def respond(v, n, restitution=1.0, friction=0.0):
-    """Velocities after a collision with a surface of unit normal `n`.
-
-    ``v_n = (v . n) n``, ``v_t = v - v_n``; approaching particles (``v . n < 0``)
-    get ``v_t - eps v_n``, with ``v_t`` reduced by Coulomb friction: the
-    tangential impulse is at most ``mu`` times the normal one, so
-    ``|v_t|`` shrinks by ``mu (1 + eps) |v . n|`` and stops at zero (it
-    never reverses). Separating particles keep their velocity.
-
-    Parameters
-    ----------
-    v : array_like, shape (k, d)
-        Velocities at the contact, in m/s.
-    n : array_like, shape (k, d)
-        Unit normals pointing out of the solid (``|n| = 1`` within
-        :data:`UNIT_TOL`; a longer or shorter ``n`` would scale the response,
-        so it is rejected rather than silently normalized).
-    restitution : float
-        ``eps`` in [0, 1].
-    friction : float
-        Coulomb coefficient ``mu`` >= 0.
-
-    Returns
-    -------
-    v_new : ndarray, shape (k, d)
-    dv_n : ndarray, shape (k, d)
-        Normal change of velocity ``-(1 + eps) v_n`` (impulse per unit mass).
-    dv_t : ndarray, shape (k, d)
-        Tangential change of velocity due to friction.
-
-    Examples
-    --------
-    >>> v_new, dv_n, dv_t = respond([[3.0, -4.0]], [[0.0, 1.0]], restitution=0.5)
-    >>> v_new.tolist(), dv_n.tolist()
-    ([[3.0, 2.0]], [[0.0, 6.0]])
-    """
-    v = as_float_array(v, "v", ndim=2)
-    n = as_float_array(n, "n", shape=v.shape)
-    length = np.sqrt(rowdot(n, n))
-    wrong = np.abs(length - 1.0) > UNIT_TOL
-    if wrong.any():
-        k = int(np.argmax(wrong))
-        raise ValueError(f"n must be unit normals (|n| = 1 within {UNIT_TOL:g}), got |n| = {length[k]:.6g} "
-                         f"in row {k}; divide n by its length first")
-    return _respond(v, n, restitution_coefficient(restitution), nonnegative_number(friction, "friction"))
-
-
-def _respond(v, n, eps, mu):
-    """:func:`respond` without the argument checks."""
-    vn = rowdot(v, n)
-    v_t = v - vn[:, None] * n
-    vn = np.minimum(vn, 0.0)  # only approaching particles are changed
-    dv_n = -(1.0 + eps) * vn[:, None] * n
-    dv_t = np.zeros_like(v)
-    if mu > 0:
-        speed_t = np.sqrt(rowdot(v_t, v_t))
-        slow = np.minimum(mu * (1.0 + eps) * -vn, speed_t)  # |tangential impulse| <= mu |normal impulse|
-        scale = np.divide(slow, speed_t, out=np.zeros_like(slow), where=speed_t > 0)
-        dv_t = -scale[:, None] * v_t
-    return v + dv_n + dv_t, dv_n, dv_t
 
 
 @dataclass
@@ -257,6 +191,7 @@ class Collider:
     def __init__(self, surface, restitution=1.0, friction=0.0, method="backtrack", max_bounces=4, samples=8,
                  backend=None):
         self.backend = check_backend(backend)
+        self.compiled_buffers = {}  # the compiled fix's work arrays (particles.collisions.collider_kernels), by name
         if not isinstance(surface, Surface):
             raise ValueError(f"surface must be a Surface (Plane, Sphere, Box, ...), got {type(surface).__name__}")
         self.surface = surface
@@ -324,7 +259,7 @@ class Collider:
             return x, v, Contacts.empty(x.shape[1])
         p = self.surface._closest(x[idx])
         n = _push_directions(self.surface, x[idx], p)
-        v_new, dv_n, dv_t = _respond(v[idx], n, self.restitution, self.friction)
+        v_new, dv_n, dv_t = response(v[idx], n, self.restitution, self.friction)
         x[idx], v[idx] = p, v_new
         mi = m[idx, None]
         log = _changed(dv_n, dv_t) | (H < -ROUNDOFF_DEPTH)
@@ -391,7 +326,7 @@ class Collider:
             xc, vc = hermite(x0[hit], v0[hit], x1[hit], v1[hit], dt[hit], s)
             x_in, _ = hermite(x0[hit], v0[hit], x1[hit], v1[hit], dt[hit], s_in)
             n = self.surface.normal(x_in) if len(hit) else xc  # the face crossed, unambiguous at corners
-            v_new, dv_n, dv_t = _respond(vc, n, self.restitution, self.friction)
+            v_new, dv_n, dv_t = response(vc, n, self.restitution, self.friction)
             rest = (1.0 - s) * dt[hit]
             ah = a[hit].copy()
             a_n = rowdot(ah, n)
@@ -452,7 +387,7 @@ class Collider:
         Collisions come last, so that no free particle ends a step inside the
         solid. The contacts of the latest step are kept in ``step.contacts``.
         When the collider's backend resolves to numba and the surface is a
-        primitive, the fix is compiled (:func:`particles.backends.fixes.collide`):
+        primitive, the fix is compiled (:func:`particles.collisions.collider_kernels.collide`):
         the same contacts and end states as :meth:`collide`, to the bit, the
         step's end state corrected in place.
 
@@ -476,13 +411,14 @@ class Collider:
         kept = {}  # the masses and the free mask, per particle count
 
         def collide(X_old, X_new, t, h):
-            fast = kernels_for(self.backend, len(X_new))
-            if fast is not None and X_old.shape == X_new.shape == (len(X_new), 2, self.surface.d) \
+            if compiled(self.backend, len(X_new)) and X_old.shape == X_new.shape == (len(X_new), 2, self.surface.d) \
                     and X_new.dtype == X_old.dtype == np.float64:
+                from .collider_kernels import collide as compiled_collide  # noqa: PLC0415  (imports numba)
                 if kept.get("n") != len(X_new):
                     kept.update(n=len(X_new), m=np.ascontiguousarray(mass_array(m, len(X_new))),
                                 free=self._free(len(X_new), pinned))
-                found = fast.collide(self, X_old, X_new, t, positive_number(h, "h", "seconds"), kept["m"], kept["free"])
+                found = compiled_collide(self, X_old, X_new, t, positive_number(h, "h", "seconds"), kept["m"],
+                                         kept["free"])
                 if found is not None:  # a primitive surface: fixed in place, compiled
                     fixed.contacts = Contacts(*found)
                     return X_new

@@ -114,11 +114,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import as_float_array, count, mass_array, nonnegative_number, pinned_indices, positive_number
-from ..backends import CLOTH_COLLISION_WEIGHT, check_backend, kernels_for
+from ..backends import check_backend
 from ..integrators.solvers import after
-from ..xpbd.colouring import color_constraints
+from ..constraints.colouring import color_constraints
 from .bodies import BodyStage, StaticBody
-from .candidates import CandidateCache, candidate_pairs
+from .candidate_cache import CandidateCache, compiled_stages
+from .candidates import candidate_pairs
 from .ccd import Impacts, detect_pairs
 from .mesh import TriangleMesh
 from .proximity import dot, edge_edge_kernel, vertex_face_kernel
@@ -237,8 +238,8 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
         iteration. 1 is plain averaging throughout.
     backend : {None, "auto", "numpy", "numba"}
         Who runs the broad phase, the proximity tests and Jacobi impulses, and the continuous test
-        (:mod:`particles.backends`; :mod:`particles.backends.cloth`: the same contacts and verdicts);
-        "auto" compiles from 64 vertices (:data:`particles.backends.CLOTH_COLLISION_WEIGHT`).
+        (:mod:`particles.backends`; :mod:`particles.collisions.compiled_stages`: the same contacts and verdicts);
+        "auto" compiles from 64 vertices (:data:`particles.collisions.candidate_cache.CLOTH_COLLISION_WEIGHT`).
 
     Attributes
     ----------
@@ -367,7 +368,7 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
     def _detect(self, x0, vbar, h, moved=None):
         dx = h * vbar
         vf, ee = self.candidates.pairs(x0, dx, 2 * self.eta, moved)
-        fast = kernels_for(self.backend, CLOTH_COLLISION_WEIGHT * self.n)
+        fast = compiled_stages(self.backend, self.n)
         return self._drop_fixed(detect_pairs(x0, dx - np.median(dx, axis=0), vf, ee, self.eta, fast))
 
     def _ccd_impulses(self, impacts, x0, vbar, h):

@@ -48,8 +48,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import as_float_array
+from .._vectors import select, vadd, vcross, vdot, vscale, vselect, vsub
 
-__all__ = ["Closest", "point_segment", "vertex_face", "edge_edge", "PARALLEL"]
+__all__ = ["Closest", "point_segment", "vertex_face", "edge_edge", "PARALLEL", "segment_closest", "triangle_closest",
+           "plane_weights", "nearest_edge_weights", "triangle_contact", "normal_or",
+           "segments_closest", "approaching_within"]
 # The kernels (dot, unit_or, vertex_face_kernel, edge_edge_kernel) skip the checks, for the collision stages
 # that call them on every step.
 
@@ -81,22 +84,149 @@ def dot(a, b):
     return np.einsum("ij,ij->i", a, b)
 
 
+def clip01(s):
+    """`s` clipped to [0, 1]."""
+    return np.minimum(np.maximum(s, 0.0), 1.0)
+
+
 def unit_or(v, fallback):
-    """Rows of `v` divided by their length; `fallback` (unit rows) where the length is zero."""
-    L = np.sqrt(dot(v, v))
-    ok = L > 0
-    out = np.array(fallback, dtype=float)
-    out[ok] = v[ok] / L[ok, None]
-    return out
+    """The 3-tuple `v` divided by its length; `fallback` (a unit 3-tuple) where the length is zero."""
+    L = np.sqrt(vdot(v, v))
+    safe = select(L > 0, L, 1.0)
+    return vselect(L > 0, (v[0] / safe, v[1] / safe, v[2] / safe), fallback)
 
 
-def _any_perpendicular(d):
-    """A unit vector perpendicular to each row of `d` (e_z for zero rows)."""
-    axis = np.zeros_like(d)
-    axis[np.arange(len(d)), np.argmin(np.abs(d), axis=1)] = 1.0  # the axis least aligned with d
-    fallback = np.zeros_like(d)
-    fallback[:, 2] = 1.0
-    return unit_or(np.cross(d, axis), fallback)
+def any_perpendicular(d):
+    """A unit 3-tuple perpendicular to the 3-tuple `d`: ``d x e_k`` for the axis least aligned with it (e_z for 0)."""
+    to_1 = np.abs(d[1]) < np.abs(d[0])
+    to_2 = np.abs(d[2]) < select(to_1, np.abs(d[1]), np.abs(d[0]))
+    axis = (1.0 * (~to_1 & ~to_2), 1.0 * (to_1 & ~to_2), 1.0 * to_2)
+    return unit_or(vcross(d, axis), (0.0, 0.0, 1.0))
+
+
+def normal_or(v, n, g):
+    """The 3-tuple `v` over its length; where that is zero, `n`'s; where that is zero too, ``any_perpendicular(g)``.
+
+    The compiled kernels compute each fallback only where it is used
+    (:mod:`particles.collisions.contact_kernels`).
+    """
+    return unit_or(v, unit_or(n, any_perpendicular(g)))
+
+
+def segment_closest(p, a, b):
+    """Parameter ``s`` of the point ``(1 - s) a + s b`` of a segment closest to `p`, and the distance (3-tuples)."""
+    d = vsub(b, a)
+    dd = vdot(d, d)
+    pa = vsub(p, a)
+    s = clip01(select(dd > 0, vdot(pa, d) / select(dd > 0, dd, 1.0), 0.0))
+    r = vsub(pa, vscale(s, d))
+    return s, np.sqrt(vdot(r, r))
+
+
+def plane_weights(p, a, b, c):
+    """Barycentric weights ``(alpha, beta, gamma)`` of the projection of `p` on the plane of ``(a, b, c)``.
+
+    3-tuples in; also whether the projection lies inside the triangle (a triangle with a plane, not a
+    sliver or a point: Cramer's rule on the edges ``e1 = b - a``, ``e2 = c - a``).
+    """
+    e1, e2 = vsub(b, a), vsub(c, a)
+    nrm = vcross(e1, e2)
+    area2 = vdot(nrm, nrm)
+    scale2 = np.maximum(vdot(e1, e1), vdot(e2, e2))
+    flat = area2 > 1e-14 * scale2 * scale2
+    r = vsub(p, a)
+    safe = select(flat, area2, 1.0)
+    beta = select(flat, vdot(vcross(r, e2), nrm) / safe, -1.0)
+    gamma = select(flat, vdot(vcross(e1, r), nrm) / safe, -1.0)
+    alpha = 1.0 - beta - gamma
+    return flat & (alpha >= 0) & (beta >= 0) & (gamma >= 0), alpha, beta, gamma
+
+
+def nearest_edge_weights(p, a, b, c):
+    """Weights ``(w0, w1, w2)`` of the point ``w0 a + w1 b + w2 c`` of the triangle's edges nearest `p` (the first on ties)."""
+    s_ab, d_ab = segment_closest(p, a, b)
+    s_bc, d_bc = segment_closest(p, b, c)
+    s_ca, d_ca = segment_closest(p, c, a)
+    bc = (d_bc < d_ab) & (d_bc <= d_ca)
+    ca = (d_ca < d_ab) & (d_ca < d_bc)
+    return (select(bc, 0.0, select(ca, s_ca, 1.0 - s_ab)), select(bc, 1.0 - s_bc, select(ca, 0.0, s_ab)),
+            select(bc, s_bc, select(ca, 1.0 - s_ca, 0.0)))
+
+
+def triangle_contact(p, a, b, c, w0, w1, w2):
+    """Distance, normal and four weights of `p` and the triangle's point ``q = w0 a + w1 b + w2 c``.
+
+    The normal points from ``q`` to `p`, or is the triangle's normal where they touch.
+    """
+    e1, e2 = vsub(b, a), vsub(c, a)
+    q = vadd(vadd(vscale(w0, a), vscale(w1, b)), vscale(w2, c))
+    d = vsub(p, q)
+    normal = normal_or(d, vcross(e1, e2), vadd(e1, e2))
+    return np.sqrt(vdot(d, d)), normal, (1.0, -w0, -w1, -w2)
+
+
+def triangle_closest(p, a, b, c):
+    """Closest points of a vertex `p` and a triangle ``(a, b, c)`` (3-tuples): distance, normal, four weights.
+
+    The projection on the triangle's plane when it lies inside (:func:`plane_weights`), else the
+    nearest point of the three edges (:func:`nearest_edge_weights`); then :func:`triangle_contact`.
+    The law of :func:`vertex_face` for one pair; the compiled stages
+    (:mod:`particles.collisions.contact_kernels`) inline its three parts, and look for the nearest
+    edge only when the projection is outside.
+    """
+    inside, alpha, beta, gamma = plane_weights(p, a, b, c)
+    w0, w1, w2 = nearest_edge_weights(p, a, b, c)
+    return triangle_contact(p, a, b, c, select(inside, alpha, w0), select(inside, beta, w1),
+                            select(inside, gamma, w2))
+
+
+def segments_closest(p1, p2, q1, q2, parallel_tol):
+    """Closest points of the segments ``p1 -> p2`` and ``q1 -> q2`` (3-tuples): distance, normal, four weights.
+
+    Ericson's clamped minimum of the quadratic in ``(s, u)``; for parallel segments the middle of the
+    overlap. The law of :func:`edge_edge` for one pair, which the compiled stages inline.
+    """
+    d1, d2, r = vsub(p2, p1), vsub(q2, q1), vsub(p1, q1)
+    a, e, b = vdot(d1, d1), vdot(d2, d2), vdot(d1, d2)
+    c, f = vdot(d1, r), vdot(d2, r)
+    denom = a * e - b * b  # |d1 x d2|^2 >= 0
+    parallel = denom <= parallel_tol * a * e
+    # general case: the unconstrained s, clamped; u from s, clamped; s again from u (Ericson 5.1.9)
+    s = clip01(select(parallel, 0.0, (b * f - c * e) / select(parallel, 1.0, denom)))
+    # parallel (or a point): the middle of the overlap of q's projection onto p's line, in p's parameter
+    a_safe = select(a > 0, a, 1.0)
+    t1 = select(a > 0, vdot(vsub(q1, p1), d1) / a_safe, 0.0)
+    t2 = select(a > 0, vdot(vsub(q2, p1), d1) / a_safe, 0.0)
+    s = select(parallel, 0.5 * (clip01(np.minimum(t1, t2)) + clip01(np.maximum(t1, t2))), s)
+    u = clip01(select(e > 0, (b * s + f) / select(e > 0, e, 1.0), 0.0))
+    s = select(parallel, s, clip01(select(a > 0, (b * u - c) / a_safe, 0.0)))
+    dv = vsub(vadd(p1, vscale(s, d1)), vadd(q1, vscale(u, d2)))
+    g = vadd(d1, vscale(1.0 * (a == 0), d2))
+    normal = normal_or(dv, vcross(d1, d2), g)
+    return np.sqrt(vdot(dv, dv)), normal, (1.0 - s, s, u - 1.0, -u)
+
+
+def _rows(v):
+    """The columns of points `v` (k, 3) as a 3-tuple of contiguous arrays."""
+    t = np.ascontiguousarray(np.asarray(v, dtype=float).T)
+    return t[0], t[1], t[2]
+
+
+def _closest(distance, normal, weights, k):
+    """A :class:`Closest` from a law's tuples (numbers broadcast to the k pairs)."""
+    def full(v):
+        return np.broadcast_to(v, (k,))
+
+    return Closest(np.array(full(distance)), np.stack([full(v) for v in normal], axis=1),
+                   np.stack([full(v) for v in weights], axis=1))
+
+
+def approaching_within(distance, vN, h, thickness):
+    """Whether a pair is a proximity contact: closer than `thickness`, or ending closer along its normal.
+
+    `distance` (m) at the start of the step, `vN` its normal velocity (m/s), `h` the step (s).
+    """
+    return (distance < thickness) | (distance + h * vN < thickness)
 
 
 def point_segment(p, a, b):
@@ -115,73 +245,21 @@ def point_segment(p, a, b):
     distance : ndarray, shape (k,)
         Distance from ``p`` to it, in metres.
     """
-    d = b - a
-    dd = dot(d, d)
-    s = np.clip(np.divide(dot(p - a, d), dd, out=np.zeros(len(p)), where=dd > 0), 0.0, 1.0)
-    r = p - a - s[:, None] * d
-    return s, np.sqrt(dot(r, r))
+    p, a, b = (np.asarray(v, dtype=float) for v in (p, a, b))
+    if p.shape[1] == 2:
+        p, a, b = (np.concatenate([v, np.zeros((len(v), 1))], axis=1) for v in (p, a, b))
+    s, distance = segment_closest(_rows(p), _rows(a), _rows(b))
+    return np.broadcast_to(s, (len(p),)).copy(), distance
 
 
 def vertex_face_kernel(p, a, b, c):
-    """:func:`particles.collisions.proximity.vertex_face` without the checks."""
-    k = len(p)
-    e1, e2 = b - a, c - a
-    nrm = np.cross(e1, e2)
-    area2 = dot(nrm, nrm)
-    scale2 = np.maximum(dot(e1, e1), dot(e2, e2))
-    flat = area2 > 1e-14 * scale2 * scale2  # a triangle with a plane (not a sliver or a point)
-    # the projection onto the plane, in barycentric coordinates (Cramer's rule on the edge vectors)
-    r = p - a
-    beta = np.divide(dot(np.cross(r, e2), nrm), area2, out=np.full(k, -1.0), where=flat)
-    gamma = np.divide(dot(np.cross(e1, r), nrm), area2, out=np.full(k, -1.0), where=flat)
-    alpha = 1.0 - beta - gamma
-    inside = flat & (alpha >= 0) & (beta >= 0) & (gamma >= 0)
-    w = np.stack([alpha, beta, gamma], axis=1)
-    # otherwise the closest of the three edges
-    s_ab, d_ab = point_segment(p, a, b)
-    s_bc, d_bc = point_segment(p, b, c)
-    s_ca, d_ca = point_segment(p, c, a)
-    dist = np.stack([d_ab, d_bc, d_ca], axis=1)
-    best = np.argmin(dist, axis=1)
-    edge_w = np.zeros((k, 3, 3))
-    edge_w[:, 0, 0], edge_w[:, 0, 1] = 1.0 - s_ab, s_ab
-    edge_w[:, 1, 1], edge_w[:, 1, 2] = 1.0 - s_bc, s_bc
-    edge_w[:, 2, 2], edge_w[:, 2, 0] = 1.0 - s_ca, s_ca
-    w = np.where(inside[:, None], w, edge_w[np.arange(k), best])
-    q = w[:, 0, None] * a + w[:, 1, None] * b + w[:, 2, None] * c
-    d = p - q
-    distance = np.sqrt(dot(d, d))
-    face_normal = unit_or(nrm, _any_perpendicular(e1 + e2))
-    normal = unit_or(d, face_normal)
-    return Closest(distance, normal, np.concatenate([np.ones((k, 1)), -w], axis=1))
+    """:func:`particles.collisions.proximity.vertex_face` without the checks (:func:`triangle_closest`)."""
+    return _closest(*triangle_closest(_rows(p), _rows(a), _rows(b), _rows(c)), len(p))
 
 
 def edge_edge_kernel(p1, p2, q1, q2):
-    """:func:`particles.collisions.proximity.edge_edge` without the checks."""
-    k = len(p1)
-    d1, d2, r = p2 - p1, q2 - q1, p1 - q1
-    a, e, b = dot(d1, d1), dot(d2, d2), dot(d1, d2)
-    c, f = dot(d1, r), dot(d2, r)
-    denom = a * e - b * b  # |d1 x d2|^2 >= 0
-    parallel = denom <= PARALLEL * a * e
-    # general case: the unconstrained s, clamped; u from s, clamped; s again from u (Ericson 5.1.9)
-    s = np.clip(np.divide(b * f - c * e, denom, out=np.zeros(k), where=~parallel), 0.0, 1.0)
-    # parallel (or a point): the middle of the overlap of q's projection onto p's line, in p's parameter
-    t1 = np.divide(dot(q1 - p1, d1), a, out=np.zeros(k), where=a > 0)
-    t2 = np.divide(dot(q2 - p1, d1), a, out=np.zeros(k), where=a > 0)
-    lo = np.clip(np.minimum(t1, t2), 0.0, 1.0)
-    hi = np.clip(np.maximum(t1, t2), 0.0, 1.0)
-    s = np.where(parallel, 0.5 * (lo + hi), s)
-    u = np.clip(np.divide(b * s + f, e, out=np.zeros(k), where=e > 0), 0.0, 1.0)
-    s_back = np.clip(np.divide(b * u - c, a, out=np.zeros(k), where=a > 0), 0.0, 1.0)
-    s = np.where(parallel, s, s_back)
-    pa = p1 + s[:, None] * d1
-    qb = q1 + u[:, None] * d2
-    dv = pa - qb
-    distance = np.sqrt(dot(dv, dv))
-    normal = unit_or(dv, unit_or(np.cross(d1, d2), _any_perpendicular(d1 + (a == 0)[:, None] * d2)))
-    weights = np.stack([1.0 - s, s, u - 1.0, -u], axis=1)
-    return Closest(distance, normal, weights)
+    """:func:`particles.collisions.proximity.edge_edge` without the checks (:func:`segments_closest`)."""
+    return _closest(*segments_closest(_rows(p1), _rows(p2), _rows(q1), _rows(q2), PARALLEL), len(p1))
 
 
 def _points(values, names):

@@ -4,15 +4,16 @@ Vertex-face and edge-edge pairs closer than ``thickness`` at the start of the st
 closer along their normal, get normal impulses with Coulomb friction, iterated (Jacobi with averaging, or
 Gauss-Seidel over vertex-disjoint colour groups), each iteration followed by the bodies' vertex pass
 (:class:`~particles.collisions.bodies.BodyStage`). With the numba backend the Jacobi iterations run in
-:func:`particles.backends.cloth.cloth_impulses`. :class:`ProximityStage` holds the methods
+:func:`particles.collisions.compiled_stages.cloth_impulses`. :class:`ProximityStage` holds the methods
 :class:`~particles.collisions.pipeline.ClothCollisions` takes from it.
 """
 
 import numpy as np
 
-from ..backends import CLOTH_COLLISION_WEIGHT, kernels_for
-from ..xpbd.colouring import color_constraints
-from .proximity import PARALLEL, dot, edge_edge_kernel, vertex_face_kernel
+from ..constraints.colouring import color_constraints
+from .candidate_cache import compiled_stages
+from .response import friction_change, proximity_impulse
+from .proximity import PARALLEL, approaching_within, dot, edge_edge_kernel, vertex_face_kernel
 
 __all__ = ["ProximityStage"]
 
@@ -36,7 +37,7 @@ class ProximityStage:
     def _proximity_contacts(self, x0, vbar, h):
         """Pairs within thickness at x0 or ending within it: vertices, weights, normals, distances."""
         vf, ee = self.candidates.pairs(x0, h * vbar, self.thickness)
-        fast = kernels_for(self.backend, CLOTH_COLLISION_WEIGHT * self.n)
+        fast = compiled_stages(self.backend, self.n)
         parts = []
         for idx, edge in ((vf, False), (ee, True)):  # the two kinds of pairs
             if not len(idx):
@@ -48,7 +49,7 @@ class ProximityStage:
             p = x0[idx]
             close = (edge_edge_kernel if edge else vertex_face_kernel)(p[:, 0], p[:, 1], p[:, 2], p[:, 3])
             vN = dot(close.normal, self._relative(vbar, idx, close.weights))
-            keep = (close.distance < self.thickness) | (close.distance + h * vN < self.thickness)
+            keep = approaching_within(close.distance, vN, h, self.thickness)
             keep &= self._effective(idx, close.weights) > 0
             if edge:  # edges whose closest points are ends: that contact is a vertex's, found with the faces
                 s_, u_ = close.weights[:, 1], -close.weights[:, 3]
@@ -77,7 +78,7 @@ class ProximityStage:
         inside = D < self.thickness
         target = np.where(inside, self.repulsion * (self.thickness - D), self.thickness - D) / h
         groups = color_constraints(V, self.n) if self.method == "gauss-seidel" else None
-        fast = kernels_for(self.backend, CLOTH_COLLISION_WEIGHT * self.n) if groups is None else None
+        fast = compiled_stages(self.backend, self.n) if groups is None else None
         if fast is not None:
             return self._compiled_proximity(fast, V, W, N, S, target, x0, vbar, t, h)
         touched = np.zeros(len(V), dtype=bool)
@@ -136,12 +137,12 @@ class ProximityStage:
         """Normal impulses to the target normal velocity, divided by `c`, with Coulomb friction."""
         rel = self._relative(vbar, V, W)
         vN = dot(N, rel)
-        I = (target - vN) / S / c  # normal impulse, N s
+        I = proximity_impulse(target, vN, S, c)  # normal impulse, N s
         impulse = I[:, None] * N
         if self.friction > 0:
             vt = rel - vN[:, None] * N
             speed = np.sqrt(dot(vt, vt))
-            J = np.minimum(self.friction * I, speed / S / c)
+            J = friction_change(self.friction, I, speed / S / c)
             impulse -= np.divide(J, speed, out=np.zeros_like(speed), where=speed > 0)[:, None] * vt
         if disjoint:  # no vertex twice: a plain indexed add
             vbar[V] += (W * self.w[V])[:, :, None] * impulse[:, None, :]

@@ -60,7 +60,7 @@ import numpy as np
 
 from .._checks import (as_float_array, count, mass_array, nonnegative_number, pinned_indices, positive_number,
                        restitution_coefficient)
-from ..constraints.provot import color_springs
+from ..constraints.colouring import color_constraints
 from ..forces.pairs import pair_differences
 from ..integrators.solvers import after
 from ..neighbors import CellGrid
@@ -217,7 +217,7 @@ class BallContacts:
         bound_k, bounce_k = self._bounds(np.einsum("kd,kd->k", v[k], nk), gap_k, h)
         lam_pairs, lam_k = np.zeros(len(i)), np.zeros(len(k))  # the impulses of each contact, N s
         v_step = v.copy()
-        groups = color_springs(np.stack([i, j], axis=1), len(x)) if len(i) else []
+        groups = color_constraints(np.stack([i, j], axis=1), len(x)) if len(i) else []
         for _ in range(self.iterations):  # a loop over sweeps (projected Gauss-Seidel)
             vn = np.einsum("kd,kd->k", v[k], nk)              # the surface contacts: one ball each
             new = np.maximum(lam_k + (bound_k - vn) / np.maximum(w[k], 1e-300), 0.0)

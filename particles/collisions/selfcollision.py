@@ -19,7 +19,7 @@ that come closer than a thickness, before they cross):
    ``w_i (thickness - r) n`` and ``j`` by ``-w_j (thickness - r) n`` with
    ``w_i = m_i^-1 / (m_i^-1 + m_j^-1)``, which keeps the centre of mass (and a
    pinned particle, of infinite mass, stays). Pairs are corrected in groups
-   that share no particle (:func:`particles.constraints.color_springs`), a
+   that share no particle (:func:`particles.constraints.colouring.color_constraints`), a
    Gauss-Seidel sweep; pushing one pair apart can bring another together, so
    search and sweep are repeated up to ``iterations`` times, until no pair is
    closer than ``thickness (1 - tol)``.
@@ -70,7 +70,7 @@ import numpy as np
 from .._checks import (as_float_array, count, index_array, mass_array, nonnegative_number, pinned_indices,
                        positive_number, restitution_coefficient)
 from .._vectors import unit
-from ..constraints.provot import color_springs
+from ..constraints.colouring import color_constraints
 from ..forces.pairs import pair_differences
 from ..integrators.solvers import after
 from ..neighbors import CellGrid, all_pairs
@@ -291,7 +291,7 @@ class SelfCollision:
             converged = bool(r.min() >= t * (1.0 - self.tol))
             if converged or passes == self.iterations:
                 break
-            for g in color_springs(np.stack([i, j], axis=1), n):  # Gauss-Seidel: one colour at a time
+            for g in color_constraints(np.stack([i, j], axis=1), n):  # Gauss-Seidel: one colour at a time
                 self._push(x, i[g], j[g])
             passes += 1
             i, j = self._close_pairs(x)
@@ -299,7 +299,7 @@ class SelfCollision:
         min_distance = float(unit(pair_differences(x, i, j))[0].min()) if len(i) else np.inf
         if found:
             i, j = np.divmod(np.unique(np.concatenate(found)), n)
-            for g in color_springs(np.stack([i, j], axis=1), n):  # one colour at a time
+            for g in color_constraints(np.stack([i, j], axis=1), n):  # one colour at a time
                 self._stop(x, v, i[g], j[g])
         return SelfCollisionResult(x, v, first, min_distance, passes, converged)
 

@@ -32,10 +32,37 @@ import numpy as np
 from .._checks import as_float_array, positive_number
 from .._vectors import rowdot, unit
 
-__all__ = ["Surface", "Plane", "Sphere", "Box", "Cylinder", "Union", "Intersection", "Complement"]
+__all__ = ["Surface", "Plane", "Sphere", "Box", "Cylinder", "Union", "Intersection", "Complement", "plane_height",
+           "round_height", "box_height"]
 
 # A point p counts as on a combined surface when |H(p)| <= _ON_SURFACE * (1 + |p|).
 _ON_SURFACE = 1e-9
+
+
+def plane_height(x0, x1, x2, n0, n1, n2, offset):
+    """A plane's ``H = n . x + offset`` (``offset = -n . p``), summed in coordinate order (0 for a 2D point's third).
+
+    The signed distances of the primitives are laws of one point, in its coordinates: the NumPy surfaces
+    apply them to columns of points, the compiled collider (:mod:`particles.collisions.collider_kernels`)
+    to one point.
+    """
+    return ((offset + n0 * x0) + n1 * x1) + n2 * x2
+
+
+def round_height(r0, r1, r2, radius, sign):
+    """A sphere's or a cylinder's ``H = sign (|r| - R)``, from the offset ``r`` from its centre or its axis."""
+    return sign * (np.sqrt((r0 * r0 + r1 * r1) + r2 * r2) - radius)
+
+
+def box_height(q0, q1, q2, sign):
+    """A box's ``H = sign (|max(q, 0)| + min(max_a q_a, 0))`` from ``q_a = |x_a - c_a| - half_a`` (``-inf`` unused)."""
+    m0, m1, m2 = np.maximum(q0, 0.0), np.maximum(q1, 0.0), np.maximum(q2, 0.0)
+    return sign * (np.sqrt((m0 * m0 + m1 * m1) + m2 * m2) + np.minimum(np.maximum(np.maximum(q0, q1), q2), 0.0))
+
+
+def _columns(x):
+    """The three coordinates of points `x` (n, d), the third 0 in 2D."""
+    return x[:, 0], x[:, 1], x[:, 2] if x.shape[1] == 3 else 0.0
 
 
 class Surface:
@@ -178,10 +205,8 @@ class Plane(Surface):
         self.d = self.point.size
 
     def _H(self, x):
-        H = np.full(len(x), -float(self.n @ self.point))
-        for a in range(self.d):  # a loop over the d coordinates
-            H += self.n[a] * x[:, a]
-        return H
+        n = list(self.n) + [0.0] * (3 - self.d)
+        return plane_height(*_columns(x), *n, -float(self.n @ self.point))
 
     def _gradient(self, x):
         return np.broadcast_to(self.n, x.shape).copy(order="F")
@@ -247,7 +272,8 @@ class Sphere(Surface):
         return r
 
     def _H(self, x):
-        return self.sign * (self._offsets(x)[1] - self.radius)
+        r, _ = self._offsets(x)
+        return round_height(*_columns(r), self.radius, self.sign)
 
     def _gradient(self, x):
         g = self._directions(x)
@@ -308,8 +334,7 @@ class Box(Surface):
 
     def _H(self, x):
         q, _ = self._q(x)
-        outside = np.sqrt(np.sum(np.maximum(q, 0.0) ** 2, axis=1))
-        return self.sign * (outside + np.minimum(q.max(axis=1), 0.0))
+        return box_height(q[:, 0], q[:, 1], q[:, 2] if self.d == 3 else -np.inf, self.sign)
 
     def _gradient(self, x):
         q, side = self._q(x)
@@ -404,7 +429,8 @@ class Cylinder(Surface):
         return u / size[:, None]
 
     def _H(self, x):
-        return self.sign * (self._offsets(x)[1] - self.radius)
+        r, _ = self._offsets(x)
+        return round_height(*_columns(r), self.radius, self.sign)
 
     def _gradient(self, x):
         return self.sign * self._directions(x)

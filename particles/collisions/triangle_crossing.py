@@ -211,6 +211,16 @@ def _grid(lo, hi):
         cell *= 2.0
 
 
+def intervals_overlap(lo_a, hi_a, lo_b, hi_b):
+    """Whether the closed intervals ``[lo_a, hi_a]`` and ``[lo_b, hi_b]`` overlap (touching counts).
+
+    Two boxes overlap when their intervals overlap along every axis: the broad phase's test of one pair,
+    which the NumPy searches apply to arrays of pairs and the compiled ones (:mod:`particles.collisions.broad_kernels`)
+    inline, pair by pair.
+    """
+    return (lo_a <= hi_b) & (lo_b <= hi_a)
+
+
 def box_pairs(lo_a, hi_a, lo_b=None, hi_b=None):
     """Pairs of overlapping axis-aligned boxes, found with a bucket grid (no test of all pairs).
 
@@ -283,7 +293,7 @@ def box_pairs(lo_a, hi_a, lo_b=None, hi_b=None):
     i, j = i[keep], j[keep]
     for a in range(lo.shape[1]):  # a loop over the d coordinates: closed intervals overlap on each axis
         la, ha = np.ascontiguousarray(lo[:, a]), np.ascontiguousarray(hi[:, a])
-        keep = (la.take(i) <= ha.take(j)) & (la.take(j) <= ha.take(i))
+        keep = intervals_overlap(la.take(i), ha.take(i), la.take(j), ha.take(j))
         i, j = i[keep], j[keep]
     if one_set:
         i, j = np.minimum(i, j), np.maximum(i, j)

@@ -34,7 +34,7 @@ import numpy as np
 
 from .._checks import as_float_array, count, index_array, nonnegative_number, per_item, positive_number
 from ..errors import ConvergenceError
-from ..forces.fields import Force, Gravity
+from ..forces import Force, Gravity
 from ..integrators.solvers import after
 from ..system import ParticleSystem
 

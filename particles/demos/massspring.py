@@ -4,7 +4,7 @@ import numpy as np
 
 from ..collisions.collider import Collider
 from ..collisions.surfaces import Plane, Sphere
-from ..constraints.provot import ProvotConstraint
+from ..constraints import ProvotConstraint
 from ..integrators.steppers import symplectic_euler
 from ..massspring.cloth import cloth
 from .data import DemoData, circle

@@ -33,7 +33,7 @@ import numpy as np
 
 from .._checks import as_float_array, end_time, nonnegative_number, positive_number
 from ..errors import SimulationDiverged
-from ..forces.fields import Force
+from ..forces.force import Force
 from ..forces.pairs import pair_differences
 from ..md.periodic import box_option, minimum_image
 from ..neighbors import cell_pairs

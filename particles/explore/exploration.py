@@ -43,7 +43,7 @@ import numpy as np
 from .._checks import count, nonnegative_number, positive_number
 from ..collisions.collider import Collider
 from ..collisions.surfaces import Plane
-from ..constraints.provot import ProvotConstraint
+from ..constraints import ProvotConstraint
 from ..errors import SimulationDiverged
 from ..forces.fields import Damping, Field, Gravity
 from ..integrators.steppers import symplectic_euler

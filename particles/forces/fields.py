@@ -1,17 +1,4 @@
-"""The Force base class and the forces of one particle at a time: gravity, damping, fields.
-
-A force is a small object with one method::
-
-    force.add_to(F, x, v, t, m)    # F += this force, F shape (n, d)
-
-where ``x`` and ``v`` are positions and velocities (shape (n, d)), ``t`` the
-time and ``m`` the masses (shape (n,)). The particle system sums all forces in
-one place (:meth:`particles.ParticleSystem.total_force`). Calling a force,
-``force(x, v, t, m)``, returns its contribution alone, which is handy for
-testing and plotting it. The contract every force keeps (it does not modify
-its inputs, conservative forces are minus the gradient of their
-``potential_energy``, internal forces conserve momentum) is tested for every
-subclass in ``tests/library/forces/test_force_contract.py``.
+"""The forces of one particle at a time: gravity, damping, fields (each a :class:`~particles.forces.force.Force`).
 
 The forces here act on each particle alone, as in the lecture:
 
@@ -21,7 +8,7 @@ The forces here act on each particle alone, as in the lecture:
   :class:`Wind`, :class:`Attractor`, :class:`Vortex`, :class:`Field`.
 
 Forces between particles live in :mod:`particles.forces.nbody`,
-:mod:`particles.forces.lennardjones` and :mod:`particles.springs`;
+:mod:`particles.forces.lennardjones` and :mod:`particles.forces.spring_sets`;
 :mod:`particles.forces` gathers them all.
 
 References
@@ -32,83 +19,10 @@ References
 
 import numpy as np
 
-from .._checks import as_float_array, finite_real, nonnegative_number, positive_number
+from .._checks import as_float_array, nonnegative_number, positive_number
+from .force import Force
 
-__all__ = ["Force", "Gravity", "Damping", "Wind", "Attractor", "Vortex", "Field"]
-
-
-class Force:
-    """Base class: subclasses implement :meth:`add_to`.
-
-    Attributes
-    ----------
-    uses_velocity, uses_time : bool
-        Whether the force depends on the velocities and on the time. Both
-        default to True (always safe); a force that depends on positions
-        only sets them False, which lets :meth:`particles.ParticleSystem.run`
-        reuse the force at the end of a velocity-Verlet step as the force at
-        the start of the next one instead of computing it again.
-    """
-
-    uses_velocity = True
-    uses_time = True
-    _compiled_role = None
-
-    def add_to(self, F, x, v, t, m):
-        """Add this force into `F` (shape (n, d), newtons), in place."""
-        raise NotImplementedError
-
-    @property
-    def compiled_role(self):
-        """What the compiled step (:mod:`particles.backends`) does with this force, or None (it calls ``add_to``).
-
-        ``"springs"`` and ``"bending"``: computed in the step's block pass;
-        ``"gravity"``, ``"damping"`` and ``"wind"``: added in the update of
-        each particle; ``"clamp"``: a compiled kernel of its own. A class
-        declares its role in ``_compiled_role``; the role holds only
-        while ``add_to`` is that class's own, so that a subclass with another
-        force law is added by its own ``add_to`` (None: the step calls it).
-        """
-        for cls in type(self).__mro__:  # a loop over the few classes of the force's lineage
-            if "_compiled_role" in cls.__dict__:
-                return cls._compiled_role if type(self).add_to is cls.add_to else None
-        return None
-
-    def __call__(self, x, v=None, t=0.0, m=1.0):
-        """This force alone, for positions `x` and velocities `v`.
-
-        Parameters
-        ----------
-        x : array_like, shape (n, d)
-            Positions, in metres.
-        v : array_like, shape (n, d), optional
-            Velocities, in m/s (default zero).
-        t : float
-            Time, in seconds.
-        m : float or array_like, shape (n,)
-            Masses, in kg, > 0.
-
-        Returns
-        -------
-        ndarray, shape (n, d)
-            The force on each particle, in newtons.
-        """
-        x = as_float_array(x, "x", ndim=2)
-        v = np.zeros_like(x) if v is None else as_float_array(v, "v", shape=x.shape)
-        m = as_float_array(m, "m", ndim=(0, 1))
-        if m.ndim == 1 and m.shape != (len(x),):
-            raise ValueError(f"m must be a number or have shape ({len(x)},), got shape {m.shape}")
-        if np.any(m <= 0):
-            raise ValueError("m must be positive: every mass must be > 0 kg")
-        m = np.broadcast_to(m, (len(x),))
-        t = finite_real(t, "t", "seconds")
-        F = np.zeros_like(x)
-        self.add_to(F, x, v, t, m)
-        return F
-
-    def __repr__(self):
-        fields = ", ".join(f"{k}={v!r}" for k, v in vars(self).items() if not k.startswith("_"))
-        return f"{type(self).__name__}({fields})"
+__all__ = ["Gravity", "Damping", "Wind", "Attractor", "Vortex", "Field", "gust_factor"]
 
 
 def _vector(value, name):
@@ -130,6 +44,23 @@ def _point(value, t, name):
     return _vector(value(t), name) if callable(value) else value
 
 
+def gust_factor(phase, along, gust, wavelength):
+    """The gusts' factor of the wind's strength: ``1 + gust sin(2 pi (phase - along / wavelength))``.
+
+    Parameters
+    ----------
+    phase : float
+        ``t / period``: the time in gust periods.
+    along : float or ndarray
+        ``x . u``: how far along the wind the particle is, in metres.
+    gust : float
+        Relative amplitude of the gusts.
+    wavelength : float
+        Distance between gust fronts, in metres (``inf``: the whole field gusts at once).
+    """
+    return 1.0 + gust * np.sin(2.0 * np.pi * (phase - along / wavelength))
+
+
 class Gravity(Force):
     """Uniform gravity: ``F = m g``, the same acceleration for every particle.
 
@@ -142,7 +73,7 @@ class Gravity(Force):
 
     uses_velocity = False
     uses_time = False
-    _compiled_role = "gravity"  # the compiled step of particles.backends adds g itself
+    _compiled_role = "gravity"  # the compiled step of particles.massspring adds g itself
 
     def __init__(self, g):
         self.g = _vector(g, "g")
@@ -175,7 +106,7 @@ class Damping(Force):
     """
 
     uses_time = False
-    _compiled_role = "damping"  # the compiled step of particles.backends subtracts (d + rate m) v itself
+    _compiled_role = "damping"  # the compiled step of particles.massspring subtracts (d + rate m) v itself
 
     def __init__(self, d=None, rate=None):
         if (d is None) == (rate is None):
@@ -220,7 +151,7 @@ class Wind(Force):
     """
 
     uses_velocity = False
-    _compiled_role = "wind"  # the compiled step of particles.backends adds it in each particle's update
+    _compiled_role = "wind"  # the compiled step of particles.massspring adds it in each particle's update
 
     @property
     def uses_time(self):
@@ -243,7 +174,7 @@ class Wind(Force):
         if self.gust:
             norm = np.linalg.norm(s)
             along = x @ (s / norm) if norm > 0 else np.zeros(len(x))
-            scale += self.gust * np.sin(2.0 * np.pi * (t / self.period - along / self.wavelength))
+            scale = gust_factor(t / self.period, along, self.gust, self.wavelength)
         if self.per_mass:
             scale *= m
         for a in range(len(s)):  # per coordinate: F += scale[:, None] * s

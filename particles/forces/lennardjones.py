@@ -17,30 +17,13 @@ References
 import numpy as np
 
 from .._checks import as_float_array, nonnegative_number, positive_number
-from ..backends import check_backend, kernels_for
+from ..backends import check_backend, compiled
 from ..md.periodic import check_box, minimum_image
 from ..neighbors import VerletList, all_pairs
-from .fields import Force
-from .pairs import pair_differences
+from .force import Force
+from .pairs import lennard_jones_virial, pair_differences
 
 __all__ = ["LennardJones"]
-
-
-def _power(base, p, out=None):
-    """``base ** p``; small integer powers by in-place multiplication (much faster).
-
-    With `out` (an array of the shape of `base`) the result is written there.
-    """
-    if float(p).is_integer() and 1 <= p <= 16:
-        if out is None:
-            result = base.copy()
-        else:
-            result = out
-            result[...] = base
-        for _ in range(int(p) - 1):  # a loop over the exponent, not the particles
-            result *= base
-        return result
-    return np.power(base, p, out=out)
 
 
 # Pairs handled together by the Lennard-Jones force pass: all temporaries of
@@ -86,8 +69,8 @@ class LennardJones(Force):
     backend : {None, "auto", "numpy", "numba"}, optional
         Who runs the ``"cells"`` force pass: this NumPy code, or a compiled
         loop over the listed pairs, by blocks of particles (see
-        :mod:`particles.backends`; None: the global choice). ``"all"`` is
-        always the NumPy reference.
+        :mod:`particles.forces.kernels`; None: the global choice, see
+        :mod:`particles.backends`). ``"all"`` is always the NumPy reference.
 
     Attributes
     ----------
@@ -102,10 +85,11 @@ class LennardJones(Force):
     makes energy checks meaningful; ``shift=False`` gives the truncated
     potential whose long-range part :meth:`tail_corrections` restores [3]_.
 
-    The force pass works on chunks of pairs that fit the processor's cache,
-    with in-place arithmetic: ``1/r^2`` once, the pair virial
-    ``r f(r) = k1 r^(1-m) - k2 r^(1-n)`` from its powers, ``f / r`` from it,
-    one scatter per chunk (see ``bench/bench_lennard_jones.py``).
+    The force pass works on chunks of pairs that fit the processor's cache:
+    ``1/r^2`` once, the pair virial ``r f(r) = k1 r^(1-m) - k2 r^(1-n)`` from
+    its powers (:func:`particles.forces.pairs.lennard_jones_virial`, which the
+    compiled pass inlines), ``f / r`` from it, one scatter per chunk (see
+    ``bench/bench_lennard_jones.py``).
 
     References
     ----------
@@ -134,6 +118,7 @@ class LennardJones(Force):
         self.box = self._list.box
         self.last_virial = 0.0
         self._last_distances = None
+        self._compiled_pass = None  # the compiled pass's lists and windows, made at its first use
 
     @classmethod
     def from_epsilon_sigma(cls, epsilon=1.0, sigma=1.0, cutoff=None, **options):
@@ -212,25 +197,15 @@ class LennardJones(Force):
         r = np.asarray(r, dtype=float)
         return self.k1 / r**self.m_exp - self.k2 / r**self.n_exp
 
-    def _pair_virials(self, inv_r2, out, tmp):
-        """``r f(r) = k1 s^-p - k2 s^-q`` from ``1/s = 1/r^2``, with ``p = (m-1)/2``, ``q = (n-1)/2``.
-
-        Written ``s^-q (k1 s^-(p-q) - k2)`` it takes a handful of in-place
-        multiplications (12-6: ``u^3 (k1 u^3 - k2)`` with ``u = 1/r^2``).
-        Zero where `inv_r2` is zero (pairs beyond the cutoff).
-        """
-        p, q = (self.m_exp - 1) / 2, (self.n_exp - 1) / 2
-        s_q = _power(inv_r2, q, out=tmp)
-        g = np.multiply(s_q if p - q == q else _power(inv_r2, p - q, out=out), self.k1, out=out)
-        g -= self.k2
-        g *= s_q
-        return g
+    def _pair_virials(self, inv_r2):
+        """``r f(r)`` from ``1/r^2`` (:func:`~particles.forces.pairs.lennard_jones_virial`); 0 where `inv_r2` is 0."""
+        return lennard_jones_virial(inv_r2, self.k1, self.k2, (self.m_exp - 1) / 2, (self.n_exp - 1) / 2)
 
     def _pair_weights(self, r2):
         """``f(r) / r`` and ``r f(r)`` from squared distances ``s = r^2``, both zero beyond the cutoff."""
         inv_r2 = np.divide(1.0, r2)
         inv_r2 *= r2 < self.cutoff**2
-        g = self._pair_virials(inv_r2, np.empty_like(inv_r2), np.empty_like(inv_r2))
+        g = self._pair_virials(inv_r2)
         return inv_r2 * g, g
 
     def add_to(self, F, x, v, t, mass):
@@ -239,10 +214,13 @@ class LennardJones(Force):
             self._add_all_pairs(F, x)
             return
         perm, i, j = self._list.ranked_pairs(x)  # ranks in cell order: neighbours are near in memory
-        fast = kernels_for(self._backend, len(x))
-        if fast is not None:  # the same arithmetic, compiled (particles.backends)
+        if compiled(self._backend, len(x)):  # the same law, compiled (particles.forces.kernels)
+            from .kernels import LennardJonesPass  # noqa: PLC0415  (imports numba)
+            if self._compiled_pass is None:
+                self._compiled_pass = LennardJonesPass()
             box = None if self.box is None else check_box(self.box, x.shape[1])
-            self.last_virial = fast.lennard_jones(self, F, x, perm, i, j, box)
+            self.last_virial = self._compiled_pass.add_to(F, x, perm, i, j, self.k1, self.k2, (self.m_exp - 1) / 2,
+                                                          (self.n_exp - 1) / 2, self.cutoff, box)
             return
         n_pairs, d, n = len(i), x.shape[1], len(x)
         xs = np.empty((d, n))  # positions by rank, one row per coordinate
@@ -251,13 +229,13 @@ class LennardJones(Force):
         Fs = np.zeros((d, n))  # forces by rank
         size = max(1, min(n_pairs, max(_PAIR_CHUNK, 2 * n)))
         r = np.empty((d, size))  # x_i - x_j, then the force on i, one row per axis
-        r2, inv_r2, g, tmp, x_j = (np.empty(size) for _ in range(5))
+        r2, inv_r2, x_j = (np.empty(size) for _ in range(3))
         inside = np.empty(size, dtype=bool)
         rc2, virial = self.cutoff**2, 0.0
         for c in range(0, n_pairs, size):  # a loop over chunks of pairs, each small enough for the cache
             ic, jc = i[c:c + size], j[c:c + size]
             k = len(ic)
-            rk, r2k, ik, gk, tk, xk, mk = (a[..., :k] for a in (r, r2, inv_r2, g, tmp, x_j, inside))
+            rk, r2k, ik, xk, mk = (a[..., :k] for a in (r, r2, inv_r2, x_j, inside))
             lo, hi = min(ic.min(), jc.min()), max(ic.max(), jc.max()) + 1  # the ranks the chunk touches
             if hi - lo < n:
                 ic, jc = ic - lo, jc - lo
@@ -272,7 +250,7 @@ class LennardJones(Force):
             np.less(r2k, rc2, out=mk)
             np.divide(1.0, r2k, out=ik)
             ik *= mk  # 1/r^2, zero beyond the cutoff
-            gk = self._pair_virials(ik, gk, tk)  # r f(r): the pair's virial
+            gk = self._pair_virials(ik)  # r f(r): the pair's virial
             virial += float(gk.sum())
             ik *= gk  # f(r) / r
             for a in range(d):  # a loop over the d coordinates: f_ij = (x_i - x_j) f / r, scattered

@@ -11,8 +11,9 @@ References
 import numpy as np
 
 from .._checks import nonnegative_number, positive_number
-from ..backends import check_backend, kernels_for
-from .fields import Force
+from ..backends import check_backend, compiled
+from .force import Force
+from .pairs import gravitational_pull
 
 __all__ = ["NBodyGravity"]
 
@@ -31,13 +32,15 @@ class NBodyGravity(Force):
         ``eps``, in metres, >= 0. Plummer softening: removes the singularity
         when two particles pass close; 0 gives the exact inverse-square law.
     backend : {None, "auto", "numpy", "numba"}, optional
-        This NumPy code or the same double loop compiled, one thread per
-        particle (see :mod:`particles.backends`; None: the global choice).
+        This NumPy code or the same law in a compiled double loop, one thread
+        per particle (:mod:`particles.forces.kernels`; None: the global
+        choice, see :mod:`particles.backends`).
 
     Notes
     -----
     O(n^2) time, computed in blocks of rows so memory stays O(n). Pairs are
-    antisymmetric term by term, so the total force is zero to round-off.
+    antisymmetric term by term, so the total force is zero to round-off. The
+    law of one pair is :func:`particles.forces.pairs.gravitational_pull`.
 
     Open space only: gravity reaches every copy of a periodic box, so the
     minimum image (one copy per pair, as for :class:`LennardJones`) would
@@ -54,18 +57,18 @@ class NBodyGravity(Force):
 
     def add_to(self, F, x, v, t, m):
         n = len(x)
-        fast = kernels_for(self._backend, n)
-        if fast is not None:  # the same sums, compiled (particles.backends)
-            fast.nbody(self, F, x, np.broadcast_to(m, (n,)))
+        if compiled(self._backend, n):  # the same law, compiled (particles.forces.kernels)
+            from .kernels import nbody_forces  # noqa: PLC0415  (imports numba)
+            nbody_forces(F, x, np.broadcast_to(m, (n,)), self.G, self.softening)
             return
         xt = np.ascontiguousarray(x.T)  # (d, n): one row per coordinate
         block = max(1, 1_000_000 // max(n, 1))
         for a in range(0, n, block):  # a loop over blocks of rows
             b = min(n, a + block)
             r = xt[:, None, :] - xt[:, a:b, None]  # (d, block, n): x_j - x_i
-            r2 = np.einsum("kij,kij->ij", r, r) + self.softening**2
+            r2 = np.einsum("kij,kij->ij", r, r)
             r2[np.arange(b - a), np.arange(a, b)] = np.inf  # no self-force
-            w = self.G * m[a:b, None] * m[None, :] / (r2 * np.sqrt(r2))
+            w = gravitational_pull(self.G, m[a:b, None], m[None, :], r2, self.softening**2)
             F[a:b] += np.einsum("ij,kij->ik", w, r)
 
     def potential_energy(self, x, m, t=0.0):

@@ -1,17 +1,17 @@
-"""Pair kernels: differences over index pairs, and Newton's third law for pair forces.
+"""Pair interactions: differences over index pairs, and the per-pair laws of N-body gravity and Lennard-Jones.
 
-Every pair interaction of the library (springs, N-body gravity,
-Lennard-Jones, boids, Provot's constraint, self-collision) gathers
-``x_i - x_j`` over its index pairs with :func:`pair_differences` and, when it
-is a force, scatters ``+f_ij`` to ``i`` and ``-f_ij`` to ``j`` with
-:func:`scatter_pair_forces`, so that the total momentum is conserved to
-round-off. Both work per coordinate on contiguous rows (see CONTRIBUTING.md,
-"Speed without loops").
+:func:`pair_differences` gathers ``x_i - x_j`` over index pairs, per
+coordinate on contiguous rows (see CONTRIBUTING.md, "Speed without loops").
+:func:`gravitational_pull` and :func:`lennard_jones_virial` are the laws of one
+pair: the NumPy passes of :class:`~particles.forces.NBodyGravity` and
+:class:`~particles.forces.LennardJones` apply them to whole arrays of pairs,
+and their compiled kernels (:mod:`particles.forces.kernels`) inline them, pair
+by pair.
 """
 
 import numpy as np
 
-__all__ = ["pair_differences", "scatter_pair_forces"]
+__all__ = ["pair_differences", "gravitational_pull", "integer_power", "lennard_jones_virial"]
 
 
 def pair_differences(x, i, j):
@@ -51,25 +51,49 @@ def pair_differences(x, i, j):
     return d
 
 
-def scatter_pair_forces(F, i, j, f_ij):
-    """Add ``f_ij`` to particles ``i`` and ``-f_ij`` to particles ``j``.
+def gravitational_pull(G, m_i, m_j, r2, eps2):
+    """``G m_i m_j / (r^2 + eps^2)^(3/2)``: the force of j on i is this times ``x_j - x_i`` (N/m).
 
     Parameters
     ----------
-    F : ndarray, shape (n, d)
-        Force array, updated in place.
-    i, j : ndarray of int, shape (p,)
-        The two particles of each pair.
-    f_ij : ndarray, shape (p, d)
-        Force on ``i`` due to ``j``; ``j`` receives the opposite (Newton's
-        third law), so the total momentum is conserved to round-off. The
-        transpose of a (d, p) array is fastest (contiguous columns).
-
-    Notes
-    -----
-    ``np.bincount`` sums the contributions of all pairs sharing a particle
-    without a Python loop (``F[i] += f`` would drop repeated indices).
+    G : float
+        Gravitational constant in the model's units.
+    m_i, m_j : float or ndarray
+        Masses, in kg.
+    r2 : float or ndarray
+        ``|x_j - x_i|^2``, in m^2 (``inf`` for a particle and itself: no pull).
+    eps2 : float
+        Plummer softening squared, in m^2.
     """
-    n = len(F)
-    for a in range(F.shape[1]):  # a loop over the d coordinates
-        F[:, a] += np.bincount(i, f_ij[:, a], minlength=n) - np.bincount(j, f_ij[:, a], minlength=n)
+    s = r2 + eps2
+    return G * m_i * m_j / (s * np.sqrt(s))
+
+
+def integer_power(u, e):
+    """``u ** e``, by repeated products when `e` is an integer from 1 to 16 (several times faster than a power)."""
+    if e == np.floor(e) and 1 <= e <= 16:
+        result = u
+        for _ in range(int(e) - 1):  # a loop over the exponent, not the pairs
+            result = result * u
+        return result
+    return u ** e
+
+
+def lennard_jones_virial(u, k1, k2, p, q):
+    """The pair virial ``r f(r) = k1 / r^(m-1) - k2 / r^(n-1)`` from ``u = 1 / r^2``: ``u^q (k1 u^(p-q) - k2)``.
+
+    With ``p = (m - 1) / 2`` and ``q = (n - 1) / 2`` (12-6: ``u^3 (k1 u^3 - k2)``). The force of j on
+    i is ``u r f(r) (x_i - x_j)``; ``u = 0`` (a pair beyond the cutoff) gives 0.
+
+    Parameters
+    ----------
+    u : float or ndarray
+        ``1 / r^2``, in 1/m^2.
+    k1, k2 : float
+        Strengths of the repulsive and attractive terms.
+    p, q : float
+        Half the exponents of ``r f(r)``, ``(m - 1) / 2`` and ``(n - 1) / 2``.
+    """
+    u_q = integer_power(u, q)
+    u_pq = u_q if p - q == q else integer_power(u, p - q)
+    return (k1 * u_pq - k2) * u_q

@@ -29,7 +29,7 @@ References
 import numpy as np
 
 from .._checks import as_float_array, index_array, indices_fit, nonnegative_number
-from .fields import Force
+from .force import Force
 
 __all__ = ["SurfaceWind"]
 

@@ -30,7 +30,7 @@ runs them in the library's loop (see :mod:`particles.integrators.solvers`):
   Anderson acceleration) until the objective's gradient is small. With
   ``backend="numba"`` (or ``"auto"`` on large systems) the local step, the
   back-substitutions and the residual run compiled
-  (:mod:`particles.backends.factored`).
+  (:mod:`particles.implicit.compiled_factorization`, over :mod:`particles.implicit.kernels`).
 
 Both are first order and dissipate energy (numerical damping grows with
 ``h``), and both are stable at time steps far above the explicit limit.
@@ -42,7 +42,14 @@ Both are first order and dissipate energy (numerical damping grows with
   factorized once;
 * :mod:`particles.implicit.sparse`: their base class and sparse pieces (the free degrees of freedom,
   factorizations);
-* :mod:`particles.implicit.statics`: :func:`relax`, the static equilibrium (a hanging cloth at rest).
+* :mod:`particles.implicit.statics`: :func:`relax`, the static equilibrium (a hanging cloth at rest);
+* :mod:`particles.implicit.compiled_factorization`: :class:`Prefactored`'s iteration compiled, over one
+  factorization (imports numba);
+* :mod:`particles.implicit.kernels`: its loops: the local step (inlining the springs' formulas), the
+  triangular solves, the residual.
+
+Implicit Euler for any ODE, :func:`particles.integrators.implicit_euler`, is a stepper of
+:mod:`particles.integrators`.
 
 References
 ----------

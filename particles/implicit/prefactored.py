@@ -14,10 +14,11 @@ References
 import numpy as np
 
 from .._checks import count, positive_number
-from ..backends import check_backend, kernels_for
+from ..backends import check_backend, compiled
 from ..errors import ConvergenceError
 from ..forces.pairs import pair_differences
-from .sparse import SpringSolver, factorize, free_dofs
+from ..forces.springs import damped_spring_force
+from .sparse import SpringSolver, factorize, free_dofs, projection_weight
 
 __all__ = ["Prefactored"]
 
@@ -59,7 +60,7 @@ class Prefactored(SpringSolver):
         `max_iterations` and `anderson`.
     backend : {None, "auto", "numpy", "numba"}, optional
         The iteration's local step, global solves and residual in this NumPy
-        code or compiled (:mod:`particles.backends.factored`; None: the
+        code or compiled (:mod:`particles.implicit.compiled_factorization`; None: the
         global choice, see :mod:`particles.backends`). The compiled solves
         run over the same factorization; they agree with NumPy's to
         rounding, and a run to the solver's tolerance.
@@ -183,7 +184,7 @@ class Prefactored(SpringSolver):
         if not np.isclose(h, self.h, rtol=1e-12, atol=0.0):
             self._factor(h)
         system, free = self.system, self._free
-        self._fast = self._compiled() if kernels_for(self._backend, system.n) is not None else None
+        self._fast = self._compiled() if compiled(self._backend, system.n) else None
         x, v, m = X[:, 0], X[:, 1], system.m
         F = np.zeros_like(x)
         for force in system.other_forces():  # a loop over the few non-spring forces
@@ -212,9 +213,9 @@ class Prefactored(SpringSolver):
         return X_new
 
     def _compiled(self):
-        """The compiled local step, solves and residual of this factorization (particles.backends.factored)."""
+        """The compiled local step, solves and residual of this factorization (particles.implicit.compiled_factorization)."""
         if self._kernels is None:
-            from ..backends.factored import FactoredKernels  # noqa: PLC0415  (imports numba)
+            from .compiled_factorization import FactoredKernels  # noqa: PLC0415  (imports numba)
             self._kernels = FactoredKernels(self._lu, self._Q_ff, self._i, self._j, self._k, self._L0,
                                             self.system.m, self._free, self.system.d)
         return self._kernels
@@ -225,7 +226,7 @@ class Prefactored(SpringSolver):
             return self._fast.local(xt)
         d = pair_differences(xt.T, self._i, self._j)
         L = np.sqrt(np.einsum("as,as->s", d, d))
-        d *= self._k * self._L0 / np.maximum(L, 1e-300)
+        d *= projection_weight(L, self._L0, self._k)
         n = self.system.n
         Jd = np.array([np.bincount(self._i, d[a], minlength=n) - np.bincount(self._j, d[a], minlength=n)
                        for a in range(len(d))])  # a loop over the d coordinates
@@ -235,7 +236,7 @@ class Prefactored(SpringSolver):
         """Net spring force on every particle, shape (d, n): J d(x) - L x."""
         d = pair_differences(xt.T, self._i, self._j)
         L = np.sqrt(np.einsum("as,as->s", d, d))
-        d *= self._k * (self._L0 / np.maximum(L, 1e-300) - 1.0)
+        d *= damped_spring_force(L, self._L0, self._k, 0.0, 0.0) / np.maximum(L, 1e-300)
         n = self.system.n
         return np.array([np.bincount(self._i, d[a], minlength=n) - np.bincount(self._j, d[a], minlength=n)
                          for a in range(len(d))])  # a loop over the d coordinates

@@ -3,14 +3,26 @@
 :class:`SpringSolver` is the base of :class:`particles.implicit.BaraffWitkin`
 and :class:`particles.implicit.Prefactored`: a solver object (see
 :mod:`particles.integrators.solvers`) bound to a :class:`~particles.massspring.MassSpringSystem`,
-first order. :func:`free_dofs` and :func:`factorize` are the sparse pieces both use.
+first order. :func:`free_dofs` and :func:`factorize` are the sparse pieces both use;
+:func:`projection_weight` is the local step of :class:`~particles.implicit.Prefactored` for one spring
+(its NumPy step and its compiled one, :mod:`particles.implicit.kernels`, both use it).
 """
 
 import numpy as np
 
 from ..integrators.solvers import Solver
 
-__all__ = ["SpringSolver", "free_dofs", "factorize"]
+__all__ = ["SpringSolver", "free_dofs", "factorize", "projection_weight"]
+
+
+def projection_weight(L, L0, k):
+    """The local step of one spring, ``k d_s`` with ``d_s = L0 (x_i - x_j) / L``, per unit of ``x_i - x_j``: ``k L0 / L``.
+
+    Each spring's energy ``k (L - L0)^2 / 2`` is the least of ``k |x_i - x_j - d|^2 / 2`` over vectors
+    ``d`` of length ``L0``; the best ``d`` points along the spring (Liu et al. 2013). A spring of
+    length 0 gives 0.
+    """
+    return k * L0 / np.maximum(L, 1e-300)
 
 
 class SpringSolver(Solver):

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import ConvergenceError
 from ..forces.fields import Damping, Gravity, Wind
-from ..springs import Bending, Clamp
+from ..forces import Bending, Clamp
 from .baraffwitkin import BaraffWitkin
 
 __all__ = ["relax"]
@@ -21,6 +21,16 @@ __all__ = ["relax"]
 # the round-off of a spring's force: its stiffness times the rounding of the positions it joins, with room
 # for the dozen springs that meet at a cloth's particle
 ROUNDOFF = 16 * np.finfo(float).eps
+
+
+def _force_scale(system, X, free):
+    """The force scale of Newton's equations: the largest net force at X or force of any one force object (N)."""
+    scale = max(np.max(np.abs(system.total_force(X, system.t)[free]), initial=0.0), 1e-300)
+    for force in system.forces:  # a loop over the few force objects
+        F_one = np.zeros_like(X[:, 0])
+        force.add_to(F_one, X[:, 0], X[:, 1], system.t, system.m)
+        scale = max(scale, np.max(np.abs(F_one[free]), initial=0.0))
+    return scale
 
 
 def relax(system, h=0.05, tol=1e-8, max_steps=2000, method="auto"):
@@ -63,8 +73,8 @@ def relax(system, h=0.05, tol=1e-8, max_steps=2000, method="auto"):
     Notes
     -----
     **The stopping rule.** At rest, a free particle ``p`` is in equilibrium
-    when its internal forces (springs, :class:`~particles.springs.Bending`,
-    :class:`~particles.springs.Clamp`) balance its loads, the forces of all
+    when its internal forces (springs, :class:`~particles.forces.Bending`,
+    :class:`~particles.forces.Clamp`) balance its loads, the forces of all
     the other force objects (gravity, wind, fields; damping is zero at
     rest). Its load is ``w_p = sum_f |F_f(p)|`` over those external forces,
     at the current positions: ``m_p |g|`` for a cloth or a string. ``relax``
@@ -106,12 +116,7 @@ def relax(system, h=0.05, tol=1e-8, max_steps=2000, method="auto"):
     free = np.setdiff1d(np.arange(system.n), system.pinned)
     X = system.X.copy(order="K")
     X[:, 1] = 0.0
-    # the force scale of Newton's equations: the largest net force at the start or force of any one force object
-    scale = max(np.max(np.abs(system.total_force(X, system.t)[free]), initial=0.0), 1e-300)
-    for force in system.forces:  # a loop over the few force objects
-        F_one = np.zeros_like(X[:, 0])
-        force.add_to(F_one, X[:, 0], X[:, 1], system.t, system.m)
-        scale = max(scale, np.max(np.abs(F_one[free]), initial=0.0))
+    scale = _force_scale(system, X, free)
     internal = {id(s) for s in system.springs.values()}
     external = [f for f in system.forces if id(f) not in internal and not isinstance(f, (Bending, Clamp))]
     k_max = max((float(s.k.max(initial=0.0)) for s in system.springs.values()), default=0.0)

@@ -166,14 +166,15 @@ def integrate(f, X0, t0, t1, h, method="rk4", every=1, blowup=BLOWUP_FACTOR, aft
 
     Notes
     -----
-    A stepper with a ``steps(f, X, times, limit)`` attribute may take the
-    steps up to the next recorded state in one call, with the divergence
-    guard inside it; it returns None where it does not apply, and the steps
-    are then taken one at a time. Symplectic Euler has one: given a
-    system's ``derivative`` whose forces all run in the compiled step, a run
-    without `after_step` takes its steps between two records in one compiled
-    call (:meth:`particles.backends.compiled.CompiledStep.symplectic_euler_steps`),
-    the same states to the bit, without the Python of each step.
+    A stepper may take several steps in one call: one with a method
+    ``steps(f, X, times, limit)`` is given the steps up to the next recorded
+    state at once, with the divergence guard (``max|X| <= limit``, finite)
+    inside the call, and returns ``(X, steps that passed, size of the last
+    state)``, or None where it does not apply (the steps are then taken one
+    at a time). A mass-spring system's compiled symplectic Euler step
+    (:mod:`particles.massspring.compiled_step`) is one; nothing runs between
+    its steps, so a run with `after_step` or stepper `options` takes one step
+    per call.
 
     Examples
     --------
@@ -208,8 +209,8 @@ def integrate(f, X0, t0, t1, h, method="rk4", every=1, blowup=BLOWUP_FACTOR, aft
     X_start = X
     # a state that grows (by default) a trillion-fold has blown up, even before it overflows
     limit = np.inf if factor is None else factor * (1.0 + np.max(np.abs(X), initial=0.0))
-    # a stepper that takes several steps in one call (symplectic Euler's compiled one) takes those up to the next
-    # recorded state, with the guard inside, when nothing runs between the steps
+    # a stepper that takes several steps in one call takes those up to the next recorded state, with the guard
+    # inside, when nothing runs between the steps (see the Notes)
     many = getattr(step, "steps", None) if after_step is None and not options else None
     k = 1
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):

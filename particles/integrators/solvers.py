@@ -20,6 +20,9 @@ fix ``fix(X_old, X_new, t, h) -> X_new``: collisions with bodies
 self-collision (:meth:`particles.collisions.selfcollision.SelfCollision.stepper`). A
 wrapped method is a method again, so wrappers nest, and a step that blew up
 goes through them untouched, for the loop's divergence guard to report.
+:func:`rewrap` puts the same fixes around another innermost step (a system
+that runs symplectic Euler as a compiled step of its own, where it is run:
+:meth:`particles.massspring.MassSpringSystem.stepper`).
 """
 
 import numpy as np
@@ -27,7 +30,7 @@ import numpy as np
 from .._checks import method_name
 from .steppers import INTEGRATORS
 
-__all__ = ["Solver", "as_stepper", "is_solver", "after"]
+__all__ = ["Solver", "as_stepper", "is_solver", "after", "rewrap"]
 
 _ATTRIBUTES = ("order", "explicit", "second_order_layout", "solver")
 
@@ -140,7 +143,8 @@ def after(method, fix, name):
     -------
     callable
         ``step(f, X, t, h, **options)``, with the ``order``,
-        ``second_order_layout`` and ``solver`` of the inner method. A step
+        ``second_order_layout`` and ``solver`` of the inner method, and
+        ``inner``, ``fix`` and ``fix_name`` (for :func:`rewrap`). A step
         whose result is not finite is returned unchanged: the fix is skipped
         and the run's divergence guard reports the blow-up.
     """
@@ -155,4 +159,28 @@ def after(method, fix, name):
     for attr in _ATTRIBUTES:
         setattr(fixed, attr, getattr(inner, attr, None))
     fixed.__name__ = f"{name}({getattr(inner, '__name__', type(inner).__name__)})"
+    fixed.inner, fixed.fix, fixed.fix_name = inner, fix, name
     return fixed
+
+
+def rewrap(method, replace):
+    """`method` with its innermost step replaced by ``replace(step)``, inside the same fixes of :func:`after`.
+
+    Parameters
+    ----------
+    method : callable
+        A stepper, possibly wrapped by :func:`after` (several times).
+    replace : callable
+        ``replace(step)`` returns the stepper to take the innermost step instead (`step` itself to keep it).
+
+    Returns
+    -------
+    callable
+        `method` itself when nothing is replaced; else new wrappers with the same fixes, in the same
+        order, around the replaced step.
+    """
+    inner = getattr(method, "inner", None)
+    if inner is None:
+        return replace(method)
+    new = rewrap(inner, replace)
+    return method if new is inner else after(new, method.fix, method.fix_name)

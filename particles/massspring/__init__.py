@@ -3,13 +3,17 @@
 Each builder returns a :class:`MassSpringSystem`, a particle system whose
 spring sets are labelled by kind, with gravity, damping and pins set up
 (``from particles.massspring import string, hair, cloth``); the forces themselves
-(springs, bending, clamps) are in :mod:`particles.springs`.
+(springs, bending, clamps) are in :mod:`particles.forces.springs` and :mod:`particles.forces.spring_sets`.
 
 * :mod:`particles.massspring.model`: :class:`MassSpringSystem` and the rules the builders share (scalings,
-  dual weights, the common forces);
+  dual weights, the common forces); the system's symplectic Euler step, compiled where its springs are;
 * :mod:`particles.massspring.strands`: :func:`string` and :func:`hair`;
-* :mod:`particles.massspring.cloth`: :func:`cloth`, :func:`cloth_springs`, :func:`cloth_masses`,
-  :func:`cloth_stiffness`.
+* :mod:`particles.massspring.cloth`: :func:`cloth`, :func:`cloth_springs` (a cloth's springs, as the slide
+  lists them), :func:`cloth_masses`, :func:`cloth_stiffness`;
+* :mod:`particles.massspring.compiled_step`: the compiled step: what it does with each force, the blocks of
+  particles, the kernel's call (imports numba);
+* :mod:`particles.massspring.step_kernels`: its loop, one parallel pass over blocks per step, inlining the
+  forces' laws.
 
 Discretization and physical parameters
 --------------------------------------
@@ -45,8 +49,8 @@ References
 """
 
 from .cloth import cloth, cloth_masses, cloth_springs, cloth_stiffness
-from .model import SCALINGS, SYMPLECTIC_LIMIT, MassSpringSystem
+from .model import SCALINGS, SYMPLECTIC_LIMIT, MassSpringSystem, SymplecticEulerStep
 from .strands import hair, string
 
-__all__ = ["cloth", "cloth_springs", "cloth_masses", "cloth_stiffness", "MassSpringSystem", "SCALINGS",
-           "SYMPLECTIC_LIMIT", "string", "hair"]
+__all__ = ["cloth", "cloth_springs", "cloth_masses", "cloth_stiffness", "MassSpringSystem", "SymplecticEulerStep",
+           "SCALINGS", "SYMPLECTIC_LIMIT", "string", "hair"]

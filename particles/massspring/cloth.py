@@ -15,7 +15,7 @@ import numpy as np
 
 from .._checks import count, nonnegative_number, positive_number
 from ..forces.fields import Wind
-from ..springs import Bending, Springs
+from ..forces.spring_sets import Bending, Springs
 from .model import MassSpringSystem, check_scaling, common_forces, dual_weights
 
 __all__ = ["cloth", "cloth_springs", "cloth_masses", "cloth_stiffness"]
@@ -171,7 +171,7 @@ def cloth(nx=16, ny=16, width=1.0, height=1.0, *, pins="top corners", plane="ver
         (defaults: shear = stretch / 4, flexion = stretch / 10).
     bending_modulus : float
         N m. If > 0, joints along rows and columns also resist bending with
-        a torque proportional to their angle (:class:`~particles.springs.Bending`),
+        a torque proportional to their angle (:class:`~particles.forces.Bending`),
         ``kb = B w / L0``.
     gravity : float
         m/s^2, along -z.

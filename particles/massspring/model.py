@@ -1,10 +1,12 @@
 """The mass-spring model: a particle system with labelled spring sets, and the rules its builders share.
 
 :class:`MassSpringSystem` is a :class:`particles.ParticleSystem` whose spring
-sets (:class:`particles.springs.Springs`) are labelled by kind
+sets (:class:`particles.forces.Springs`) are labelled by kind
 (``"structural"``, ``"shear"``, ...), with the quantities the lecture
 measures on them: strains, the springs' Jacobians for implicit solvers, the
-highest frequency and the largest stable step of symplectic Euler. The
+highest frequency and the largest stable step of symplectic Euler; its runs
+take symplectic Euler's steps in one compiled pass where its springs run
+compiled (:meth:`MassSpringSystem.stepper`, :class:`SymplecticEulerStep`). The
 builders of :mod:`particles.massspring.strands` (strings, hair) and
 :mod:`particles.massspring.cloth` make them, with the discretization rules below
 (:func:`dual_weights`, :func:`common_forces`; see :mod:`particles.massspring`
@@ -14,11 +16,14 @@ for the naive and physical scalings).
 import numpy as np
 
 from .._checks import nonnegative_number
+from ..backends import compiled
 from ..forces.fields import Damping, Gravity
+from ..integrators import rewrap, symplectic_euler
+from ..integrators.common import check_arguments
 from ..system import ParticleSystem
 
-__all__ = ["MassSpringSystem", "SCALINGS", "SYMPLECTIC_LIMIT", "check_scaling", "dual_weights", "common_forces",
-           "gravity_vector"]
+__all__ = ["MassSpringSystem", "SymplecticEulerStep", "SCALINGS", "SYMPLECTIC_LIMIT", "check_scaling",
+           "dual_weights", "common_forces", "gravity_vector"]
 
 SYMPLECTIC_LIMIT = 2.0  # symplectic Euler and Verlet are stable for omega h <= 2
 
@@ -59,6 +64,34 @@ class MassSpringSystem(ParticleSystem):
         super().__init__(x, v=v, m=m, forces=list(springs) + list(forces), pinned=pinned, t=t)
         self.points = dict(points or {})
         self.grid_shape = grid_shape
+        self._compiled_step = None  # the compiled step's layout of this system, made at its first use
+
+    def stepper(self, method):
+        """The stepper a run takes its steps with (:meth:`particles.ParticleSystem.stepper`), symplectic Euler
+        as :class:`SymplecticEulerStep`: this system's step in one compiled pass where its springs run compiled.
+
+        Chosen once per run, where the system runs: symplectic Euler alone or inside fixes
+        (:func:`particles.integrators.after`: Provot's constraint, a collider) becomes the system's own
+        step; every other method is left as it is.
+        """
+        return rewrap(super().stepper(method), lambda step: SymplecticEulerStep(self) if step is symplectic_euler
+                      else step)
+
+    def compiled_step(self):
+        """This system's :class:`~particles.massspring.compiled_step.CompiledStep` when it applies, else None.
+
+        It applies when the system has one to three :class:`~particles.forces.Springs` sets
+        (``compiled_role == "springs"``), in 2D or 3D, all resolving to numba for the system's size
+        (:func:`particles.backends.compiled`), and the step covers its forces
+        (:meth:`~particles.massspring.compiled_step.CompiledStep.parts`). Nothing imports numba otherwise.
+        """
+        springs = [f for f in self.forces if getattr(f, "compiled_role", None) == "springs"]
+        if not springs or not all(compiled(f._backend, self.n) for f in springs):
+            return None
+        if self._compiled_step is None:
+            from .compiled_step import CompiledStep  # noqa: PLC0415  (imports numba)
+            self._compiled_step = CompiledStep(self)
+        return self._compiled_step if self._compiled_step.parts(self.n) is not None else None
 
     def spring_indices(self):
         """All springs' index pairs, shape (s, 2), kinds concatenated in order."""
@@ -83,7 +116,7 @@ class MassSpringSystem(ParticleSystem):
     def spring_jacobians(self, X=None, clamp=True):
         """Sum of all spring sets' ``dF/dx`` and ``dF/dv`` (sparse, (n d)^2).
 
-        See :meth:`particles.springs.Springs.jacobians`; `clamp` keeps
+        See :meth:`particles.forces.Springs.jacobians`; `clamp` keeps
         ``-dF/dx`` positive semi-definite for implicit integration.
         """
         import scipy.sparse
@@ -131,6 +164,57 @@ class MassSpringSystem(ParticleSystem):
         """The forces that are not spring sets (gravity, damping, wind, bending)."""
         springs = set(map(id, self.springs.values()))
         return [f for f in self.forces if id(f) not in springs]
+
+
+class SymplecticEulerStep:
+    """Symplectic Euler for one mass-spring system: its compiled step where it applies, else the NumPy stepper.
+
+    A stepper ``step(f, X, t, h)`` (``order`` 1, second-order layout) that
+    :meth:`MassSpringSystem.stepper` puts in place of
+    :func:`~particles.integrators.symplectic_euler`: it takes the step with
+    the system's :meth:`~MassSpringSystem.compiled_step` (the same state as
+    the NumPy step, to rounding) when that applies, and with
+    ``symplectic_euler(f, X, t, h)`` otherwise. Its :meth:`steps` lets
+    :func:`particles.integrators.integrate` take the steps up to the next
+    recorded state in one compiled call.
+    """
+
+    order = 1
+    explicit = True
+    second_order_layout = True
+    fsal = False
+
+    def __init__(self, system):
+        self.system = system
+        self.__name__ = "symplectic_euler"  # error messages name the method
+
+    def __call__(self, f, X, t, h):
+        step = self.system.compiled_step()
+        if step is not None:
+            X_checked, h_checked = check_arguments(X, t, h)
+            X_new = step.symplectic_euler(X_checked, t, h_checked)
+            if X_new is not None:
+                return X_new
+        return symplectic_euler(f, X, t, h)
+
+    def steps(self, f, X, times, limit):
+        """The steps from ``times[0]`` to ``times[-1]`` in one compiled call, guarded; None when it does not apply.
+
+        Each step is the one :meth:`__call__` takes, to the bit, and the divergence guard
+        (``max|X| <= limit``, finite) runs after each step inside the call
+        (:meth:`~particles.massspring.compiled_step.CompiledStep.symplectic_euler_steps`).
+
+        Returns
+        -------
+        (ndarray, int, float) or None
+            The last state that passed the guard, the number of steps that passed, and the size
+            ``max|X|`` of the last state computed.
+        """
+        step = self.system.compiled_step()
+        if step is None:
+            return None
+        X, _ = check_arguments(X, times[0], times[1] - times[0])
+        return step.symplectic_euler_steps(X, times, limit)
 
 
 def check_scaling(scaling):

@@ -8,7 +8,7 @@ gravity, damping and pins set up, under the naive or the physical scaling of
 import numpy as np
 
 from .._checks import count, nonnegative_number, positive_number
-from ..springs import Bending, Clamp, Springs
+from ..forces.spring_sets import Bending, Clamp, Springs
 from .model import MassSpringSystem, check_scaling, common_forces, dual_weights
 
 __all__ = ["string", "hair"]
@@ -114,7 +114,7 @@ def hair(n=20, length=0.3, *, pin="root", d=2, direction=None, scaling="naive", 
     """A hair: a chain of springs plus bending forces at the joints.
 
     The bending force at each joint is proportional to the angle between
-    the two segments (see :class:`particles.springs.Bending`), so the hair
+    the two segments (see :class:`particles.forces.Bending`), so the hair
     tends to stay straight and droops under gravity like a cantilever.
 
     Parameters
@@ -123,7 +123,7 @@ def hair(n=20, length=0.3, *, pin="root", d=2, direction=None, scaling="naive", 
         As for :func:`string`.
     pin : {"root", "pair", "top", "none"}
         ``"root"`` (default) clamps the hair at its first particle: that one
-        is fixed, and a :class:`~particles.springs.Clamp` of stiffness
+        is fixed, and a :class:`~particles.forces.Clamp` of stiffness
         ``2 kb`` holds the first segment along `direction` (the mirror-image
         ghost node of beam theory), so that a cantilever's tip deflection
         converges at second order in the spacing. ``"pair"`` fixes the first
@@ -141,8 +141,8 @@ def hair(n=20, length=0.3, *, pin="root", d=2, direction=None, scaling="naive", 
     Returns
     -------
     MassSpringSystem
-        Spring set ``"structural"`` and a :class:`~particles.springs.Bending`
-        force (with ``pin="root"`` also the :class:`~particles.springs.Clamp`)
+        Spring set ``"structural"`` and a :class:`~particles.forces.Bending`
+        force (with ``pin="root"`` also the :class:`~particles.forces.Clamp`)
         among :meth:`MassSpringSystem.other_forces`.
     """
     if pin not in ("root", "pair", "top", "none"):

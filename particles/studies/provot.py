@@ -9,7 +9,7 @@ Provot's constraint keeps every structural and shear spring within 10%.
 import numpy as np
 
 from .._checks import count, positive_number
-from ..constraints.provot import ProvotConstraint
+from ..constraints import ProvotConstraint
 from ..integrators.steppers import symplectic_euler
 from ..massspring.cloth import cloth
 

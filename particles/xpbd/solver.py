@@ -40,8 +40,7 @@ each particle along its gradient, weighted by ``w_p``, by
 **Iterations.** Gauss-Seidel (default) goes through the constraints one after
 another, each seeing the corrections of the previous ones. Without a Python
 loop over constraints, it sweeps through groups of constraints that share no
-particle (a graph colouring, :func:`color_constraints`; for springs the one
-of :func:`particles.constraints.color_springs`): within a group the order
+particle (a graph colouring, :func:`particles.constraints.colouring.color_constraints`): within a group the order
 does not matter, and each group is one vectorized update. Jacobi computes
 every ``dlambda`` from the same positions; a particle shared by ``c``
 constraints would then receive ``c`` corrections each computed as if alone,
@@ -66,7 +65,7 @@ Unconverged iterations make the material softer, not more damped; substeps
 lose less energy because each implicit step is smaller (lecture 8 measures
 both).
 
-**Constraints** (each a vectorized set, :mod:`particles.xpbd.constraints`):
+**Constraints** (each a vectorized set, :mod:`particles.xpbd.constraint_sets`):
 :class:`Distance` (strings, hair and cloth springs), :class:`IsometricBending`
 (hair joints, cloth rows and columns; why this bending model, see there),
 :class:`IsometricClamp` (a hair's clamped root) and :class:`Attachment` (a
@@ -91,136 +90,21 @@ References
 import numpy as np
 
 from .._checks import as_float_array, count, pinned_indices, positive_number
-from ..backends import XPBD_WEIGHT, check_backend, kernels_for
-from .colouring import color_constraints
-from .constraints import Attachment, ConstraintSet, Distance, IsometricBending, IsometricClamp
+from ..backends import check_backend, compiled
+from .constraint_sets import ConstraintSet, Distance
+from .from_springs import constraints_from_system
 from .stiffness import iteration_corrected
 
-__all__ = ["XPBD", "PBD", "Distance", "IsometricBending", "IsometricClamp", "Attachment", "color_constraints",
-           "constraints_from_system", "distance_pass"]
+__all__ = ["XPBD", "PBD", "XPBD_WEIGHT"]
 
 METHODS = ("gauss-seidel", "jacobi")
 
-
-def constraints_from_system(system, kinds=None, bending=True):
-    """Distance (and bending) constraints equivalent to a mass-spring system's springs.
-
-    Each spring of stiffness ``k`` and damping ``kd`` becomes a distance
-    constraint of compliance ``1 / k`` and damping ``kd``, so that converged
-    XPBD has the same elastic energy as the springs; a
-    :class:`~particles.springs.Bending` force of joint stiffness ``kb``
-    becomes isometric bending of compliance ``1 / kb``, and a
-    :class:`~particles.springs.Clamp` an :class:`IsometricClamp`.
-
-    Parameters
-    ----------
-    system : MassSpringSystem
-        A string, hair or cloth from :mod:`particles.massspring`.
-    kinds : sequence of str, optional
-        Spring kinds to convert (default: all of the system's).
-    bending : bool
-        Convert the system's Bending and Clamp forces too.
-
-    Returns
-    -------
-    constraints : list of Distance, IsometricBending and IsometricClamp
-    converted : list
-        The force objects of the system that the constraints replace (a
-        solver built with :meth:`XPBD.from_system` leaves them out).
-    """
-    from ..springs import Bending, Clamp
-
-    if not hasattr(system, "springs"):
-        raise ValueError("system must be a MassSpringSystem (with labelled spring sets)")
-    kinds = list(system.springs) if kinds is None else list(kinds)
-    unknown = [k for k in kinds if k not in system.springs]
-    if unknown:
-        raise ValueError(f"kinds {unknown} are not spring kinds of the system; it has {list(system.springs)}")
-    constraints, converted = [], []
-    for kind in kinds:  # a loop over the few spring kinds
-        s = system.springs[kind]
-        constraints.append(Distance(s.indices, s.rest_length, compliance=1.0 / s.k, damping=s.kd, kind=kind))
-        converted.append(s)
-    if bending:
-        for force in system.other_forces():  # a loop over the few force objects
-            if isinstance(force, Bending):
-                if np.any(np.abs(force.rest_angle) > 1e-12):
-                    raise ValueError("isometric bending needs straight rest shapes (rest_angle 0); this "
-                                     "system's Bending force has curved ones")
-                triples = np.stack([force.i, force.j, force.l], axis=1)
-                compliance = np.divide(1.0, force.kb, out=np.full(len(force.kb), np.inf), where=force.kb > 0)
-                keep = np.isfinite(compliance)
-                constraints.append(IsometricBending(triples[keep], x=system.X[:, 0], compliance=compliance[keep],
-                                                    kind="bending"))
-                converted.append(force)
-            elif isinstance(force, Clamp):
-                x = system.X[:, 0]
-                keep = force.kb > 0
-                L0 = np.linalg.norm(x[force.j] - x[force.i], axis=1)[keep]
-                constraints.append(IsometricClamp(np.stack([force.i, force.j], axis=1)[keep], force.direction[keep],
-                                                  L0, compliance=1.0 / force.kb[keep], kind="clamp"))
-                converted.append(force)
-    return constraints, converted
-
-
-def distance_pass(x, w, indices, rest_length, alpha_tilde, lam, groups=None, backend=None):
-    """One XPBD pass over distance constraints: Gauss-Seidel over colour groups, or Jacobi.
-
-    For each constraint ``C = |x_i - x_j| - L0`` with ``u = (x_i - x_j) / |x_i - x_j|``::
-
-        dlambda = (-C - alpha_tilde lambda) / (w_i + w_j + alpha_tilde)
-        x_i += w_i dlambda u,    x_j -= w_j dlambda u,    lambda += dlambda
-
-    Parameters
-    ----------
-    x : array_like, shape (n, d)
-        Positions, in metres. Not modified.
-    w : array_like, shape (n,)
-        Inverse masses ``1 / m`` in 1/kg, 0 for pinned particles.
-    indices : array_like of int, shape (s, 2)
-    rest_length : array_like, shape (s,)
-        ``L0`` in metres.
-    alpha_tilde : float or array_like, shape (s,)
-        ``alpha / h^2`` of the substep, in kg^-1 (0: rigid).
-    lam : array_like, shape (s,)
-        Multipliers accumulated so far in this substep. Not modified.
-    groups : list of array_like of int, or ndarray of int, shape (s,), optional
-        Colour groups, or a colour per constraint (swept in increasing
-        order): a Gauss-Seidel pass. Omitted: one Jacobi pass with averaging
-        (module notes).
-    backend : {None, "auto", "numpy", "numba"}, optional
-        This NumPy code or the same projections compiled (see
-        :mod:`particles.backends`; None: the global choice).
-
-    Returns
-    -------
-    x_new : ndarray, shape (n, d)
-    lam_new : ndarray, shape (s,)
-
-    Examples
-    --------
-    A rod of rest length 1 m stretched to 1.5 m, its first end pinned, rigid:
-
-    >>> x, lam = distance_pass([[0.0, 0.0], [1.5, 0.0]], [0.0, 1.0], [[0, 1]], [1.0], 0.0, [0.0])
-    >>> x.tolist(), lam.tolist()
-    ([[0.0, 0.0], [1.0, 0.0]], [-0.5])
-    """
-    x = as_float_array(x, "x", ndim=2)
-    w = as_float_array(w, "w", shape=(len(x),))
-    if np.any(w < 0):
-        raise ValueError("w must hold inverse masses >= 0 (0 for pinned particles)")
-    c = Distance(indices, rest_length, compliance=alpha_tilde, groups=groups)
-    if c.highest >= len(x):
-        raise ValueError(f"indices refer to particle {c.highest} but x has only {len(x)} particles")
-    lam = np.array(as_float_array(lam, "lam", shape=(len(c),)))
-    xt = np.ascontiguousarray(x.T)
-    fast = kernels_for(check_backend(backend), len(x))
-    for b in c.batches(w, "jacobi" if groups is None else "gauss-seidel"):  # a loop over colours
-        if fast is not None:  # the same projections, compiled (particles.backends)
-            fast.distance_project(c, b, xt, xt, lam, 1.0, "xpbd")
-            continue
-        c.project(b, xt, xt, lam, 1.0, "xpbd")
-    return np.ascontiguousarray(xt.T), lam
+# XPBD and PBD ask "auto" (particles.backends) with this many times their particles: a step is its substeps'
+# sweeps over the colour groups, a few dozen NumPy calls each. `python bench/bench_cloth_fold.py --xpbd-sizes` (the
+# fold's sheet, 10 substeps, ms per step, NumPy / compiled, 2026-12-06): 8^2 1.92 / 0.33, 16^2 2.48 / 0.50,
+# 24^2 3.46 / 0.77, 32^2 4.46 / 1.17, 48^2 8.28 / 2.32, 64^2 12.22 / 3.97. Compiled from 1024 particles: a 32^2
+# sheet, not the lectures' curtains (10^2 and 12^2), which stay bit for bit the reference's
+XPBD_WEIGHT = 4
 
 
 class XPBD:
@@ -255,11 +139,11 @@ class XPBD:
         al. (2019) treat contacts; or wrap the whole stepper with
         :meth:`~particles.collisions.Collider.stepper`.
     backend : {None, "auto", "numpy", "numba"}, optional
-        The NumPy code of :meth:`Distance.project` and the other sets'
-        ``project``, or the same projections compiled (see
-        :mod:`particles.backends`; None: the global choice). Compiled, a
+        The NumPy code of :meth:`~particles.xpbd.constraint_sets.Distance.project` and the other sets'
+        ``project``, or the same projections compiled (:mod:`particles.xpbd.kernels`;
+        None: the global choice, see :mod:`particles.backends`). Compiled, a
         Gauss-Seidel substep is one call
-        (:class:`particles.backends.xpbdstep.CompiledSubstep`): the
+        (:class:`particles.xpbd.compiled_substep.CompiledSubstep`): the
         prediction, every set's colour groups (distance, bending, clamps,
         attachments; each group's rows in parallel) and the new velocities,
         with uniform gravity and damping folded in (other forces evaluated in
@@ -348,6 +232,8 @@ class XPBD:
         self._batches = [s.batches(self.w, method) for s in self._sets]
         self._multipliers, self._last = [c.new_multipliers(0) for c in constraints], None
         self.violation = []
+        self._fused = None  # the compiled substep of these batches, made at its first use
+        self._passes = None  # the compiled distance projections, batch by batch, made at their first use
 
     @property
     def n(self):
@@ -361,7 +247,7 @@ class XPBD:
         Parameters
         ----------
         system : MassSpringSystem
-            Its spring sets (and :class:`~particles.springs.Bending` forces)
+            Its spring sets (and :class:`~particles.forces.Bending` forces)
             become constraints of the same energy (:func:`constraints_from_system`);
             its other forces (gravity, damping, wind) act as external forces.
             Run it with ``system.run(T, h, method=solver)``.
@@ -407,7 +293,7 @@ class XPBD:
         v = np.ascontiguousarray(X[:, 1].T)
         v[:, self.pinned] = 0.0
         fused = self._compiled(len(x))
-        if fused is not None:  # the whole substep in one compiled call (particles.backends.xpbdstep)
+        if fused is not None:  # the whole substep in one compiled call (particles.xpbd.compiled_substep)
             terms = None if self.forces is None else fused.force_terms(self.forces, len(x))
             d_lam, l_lam, lams = fused.multipliers()
         for s in range(self.substeps):  # a loop over substeps
@@ -441,15 +327,14 @@ class XPBD:
 
         It applies with the Gauss-Seidel method, the backend resolving to numba
         for this many particles, and every set of a compiled form (distance or
-        linear, :attr:`~particles.xpbd.constraints.Distance.compiled_form`); kept
+        linear, :attr:`~particles.xpbd.constraint_sets.ConstraintSet.compiled_form`); kept
         until the batches are rebuilt (:meth:`set_stiffness`).
         """
-        if self.method != "gauss-seidel" or kernels_for(self._backend, XPBD_WEIGHT * self.n) is None:
+        if self.method != "gauss-seidel" or not compiled(self._backend, XPBD_WEIGHT * self.n):
             return None
-        kept = self.__dict__.get("_fused")
-        if kept is not None and kept[0] is self._batches and kept[1] == d:
-            return kept[2]
-        from ..backends.xpbdstep import CompiledSubstep  # noqa: PLC0415  (imports numba)
+        if self._fused is not None and self._fused[0] is self._batches and self._fused[1] == d:
+            return self._fused[2]
+        from .compiled_substep import CompiledSubstep  # noqa: PLC0415  (imports numba)
 
         fused = None
         if CompiledSubstep.applies(self._sets, self._batches, d):
@@ -460,15 +345,20 @@ class XPBD:
     def _solve(self, x, x_n, hs):
         """The constraint iterations of one substep, on x (d, n) in place; returns the multipliers."""
         lams = [s.new_multipliers(len(x)) for s in self._sets]
-        weight = XPBD_WEIGHT * self.n
-        fast = [kernels_for(self._backend, weight) if isinstance(s, Distance) else None for s in self._sets]
+        passes = None
+        if compiled(self._backend, XPBD_WEIGHT * self.n):  # distance sets projected compiled, batch by batch
+            from .kernels import CompiledPasses  # noqa: PLC0415  (imports numba)
+            if self._passes is None:
+                self._passes = CompiledPasses()
+            passes = self._passes
         for _ in range(self.iterations):  # a loop over iterations
-            for s, batches, lam, kernels in zip(self._sets, self._batches, lams, fast):  # a loop over the few sets
+            for s, batches, lam in zip(self._sets, self._batches, lams):  # a loop over the few sets
+                compiled_set = passes is not None and isinstance(s, Distance)
                 for b in batches:  # Gauss-Seidel: one colour at a time (Jacobi: one batch)
-                    if kernels is not None:  # the same projections, compiled (particles.backends)
-                        kernels.distance_project(s, b, x, x_n, lam, hs, self.formulation)
-                        continue
-                    s.project(b, x, x_n, lam, hs, self.formulation)
+                    if compiled_set:
+                        passes.project(b, x, x_n, lam, hs, self.formulation)
+                    else:
+                        s.project(b, x, x_n, lam, hs, self.formulation)
         return lams
 
     @property

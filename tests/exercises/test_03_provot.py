@@ -43,9 +43,10 @@ EXERCISE = "03_provot"
 FORBIDDEN = {
     "particles.constraints.provot_projection": "it is the projection you are asked to write",
     "particles.constraints.ProvotConstraint": "it applies the projection you are asked to write",
-    "particles.constraints.provot._correct": "it is the library's own Jacobi pass; write the pass with NumPy",
+    "particles.constraints.provot.provot_pass": "it is the library's own pass; write the pass with NumPy",
+    "particles.constraints.provot.provot_excess": "it is the correction you are asked to write",
     "particles.studies.provot": "it runs the curtain study you are asked to build",
-    "particles.springs.Springs": "compute the spring lengths and strains yourself with NumPy",
+    "particles.forces.Springs": "compute the spring lengths and strains yourself with NumPy",
     "particles.massspring.MassSpringSystem": "its strain and max_strain are what you are asked to write",
 }
 

@@ -33,11 +33,13 @@ from particles.course.grading.memo import memoized
 from particles.course.worker.runner import GradingFailure, describe_value
 from particles.forces import Gravity
 from particles.massspring import cloth
-from particles.xpbd import XPBD, Distance, color_constraints, distance_pass
+from particles.constraints import color_constraints
+from particles.xpbd import XPBD, Distance, distance_pass
 
 EXERCISE = "05_xpbd"
 FORBIDDEN = {
     "particles.xpbd.distance_pass": "it is the pass you are asked to write",
+    "particles.xpbd.multiplier_step": "it is the multiplier update you are asked to write",
     "particles.xpbd.XPBD": "it is the solver you are asked to write",
     "particles.xpbd.PBD": "it is a position-based solver: write your own step",
     "particles.xpbd.Distance": "it projects distance constraints for you; write the projection with NumPy",

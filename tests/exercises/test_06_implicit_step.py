@@ -28,7 +28,7 @@ import pytest
 from particles.course.grading.expect import expect_array, expect_float
 from particles.course.grading.memo import memoized
 from particles.course.worker.runner import GradingFailure
-from particles.springs import Springs
+from particles.forces import Springs
 
 EXERCISE = "06_implicit_step"
 _STEP = "it is the implicit step you are asked to write"
@@ -37,8 +37,8 @@ FORBIDDEN = {
     "particles.implicit.BaraffWitkin": _STEP,
     "particles.implicit.Prefactored": _STEP,
     "particles.integrators.implicit_euler": _STEP,
-    "particles.springs.spring_jacobian_blocks": _JACOBIAN,
-    "particles.springs.Springs.jacobians": _JACOBIAN,
+    "particles.forces.spring_jacobian_blocks": _JACOBIAN,
+    "particles.forces.Springs.jacobians": _JACOBIAN,
     "particles.massspring.MassSpringSystem.spring_jacobians": _JACOBIAN,
     "particles.studies.stability.damping_factor": "measure the damping with your own step",
 }

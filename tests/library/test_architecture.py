@@ -1,11 +1,14 @@
-"""The library's layout: no import circles, each concept in its home, one time loop.
+"""The library's layout: its layers, no import circles, each concept in its home, one formula in one place.
 
 The import graph of ``particles/`` is built from the syntax trees of its
 modules (not by importing them): module-level imports, and imports inside
-functions (lazy ones) counted separately.
+functions (lazy ones) counted separately. :data:`LAYERS` writes down which
+package may import which; :data:`KERNEL_LAWS` which law of the NumPy code
+each compiled kernel inlines.
 """
 
 import ast
+import functools
 import re
 from pathlib import Path
 
@@ -121,6 +124,67 @@ def test_lazy_imports_close_no_other_circle():
     assert sorted(sorted(c) for c in circles) == []
 
 
+# The layers of the library, lowest first: a module may import its own layer's modules and those of the layers
+# below, never one above (lazy imports included). A module belongs to the longest prefix that names it.
+LAYERS = [
+    ("what every module shares", ["particles._checks", "particles._vectors", "particles.errors"]),
+    ("the backends' switch, compile wrapper and threads", ["particles.backends"]),
+    ("steppers, the time loop, births and deaths, test problems",
+     ["particles.integrators", "particles.population", "particles.problems"]),
+    ("periodic boxes and thermostats", ["particles.md"]),
+    ("the bucket grid and Verlet lists", ["particles.neighbors"]),
+    ("forces, springs among them", ["particles.forces"]),
+    ("the particle system", ["particles.system"]),
+    ("constraints of mass-spring models, and the colouring", ["particles.constraints"]),
+    ("mass-spring models and their compiled step", ["particles.massspring"]),
+    ("solvers: implicit and position-based", ["particles.implicit", "particles.xpbd"]),
+    ("collisions", ["particles.collisions"]),
+    ("effects and flocks", ["particles.effects"]),
+    ("drawing", ["particles.render"]),
+    ("studies", ["particles.studies"]),
+    ("explorations", ["particles.explore"]),
+    ("demos", ["particles.demos"]),
+    ("the tools: the tour, warm, the course, the command line",
+     ["particles.tour", "particles.warm", "particles.course", "particles.cli", "particles.__main__", "particles"]),
+]
+
+
+def _layer(module):
+    """The index in LAYERS of `module`'s layer (the longest prefix that names it), or None."""
+    best, found = "", None
+    for k, (_, prefixes) in enumerate(LAYERS):
+        for prefix in prefixes:
+            if (module == prefix or module.startswith(prefix + ".")) and len(prefix) > len(best):
+                best, found = prefix, k
+    return found
+
+
+def _imported_modules(name):
+    """The modules of the package that `name` imports (module-level and lazy): ``from pkg import sub`` is sub."""
+    out = set()
+    for target, names, _, line in IMPORTS[name]:
+        subs = [f"{target}.{n}" for n in names if f"{target}.{n}" in MODULES]
+        if subs and len(subs) == len(names):
+            out.update((s, line) for s in subs)
+        elif target in MODULES:
+            out.update([(target, line)] + [(s, line) for s in subs])
+        elif target.startswith("particles."):
+            out.add((target.rpartition(".")[0], line))
+    return out
+
+
+def test_every_module_has_a_layer():
+    """Each module of the package (the course's too) belongs to a layer of LAYERS."""
+    assert sorted(name for name in MODULES if _layer(name) is None) == []
+
+
+def test_no_import_runs_upward_across_the_layers():
+    """No module imports a module of a higher layer, at load or inside a function (the backends import no concept)."""
+    upward = [f"{name}:{line} imports {target} ({LAYERS[_layer(target)][0]})" for name in sorted(MODULES)
+              for target, line in sorted(_imported_modules(name)) if _layer(target) > _layer(name)]
+    assert upward == []
+
+
 def test_demos_and_effects_import_no_circle():
     """The demo registry is explicit (no module registers itself by importing it), effects and emitters are one-way."""
     graph = _edges(lazy=True)
@@ -194,6 +258,135 @@ def test_one_time_loop():
     assert grids == []
 
 
+# --- one formula, one place -----------------------------------------------------------------------------------
+
+# Every compiled kernel (a function decorated with ``@jit`` in a kernels module, one that imports
+# particles.backends.compile) with the law it computes: a per-item function of its concept's NumPy code, which
+# the kernel inlines (directly, or through the kernel modules' helpers).
+KERNEL_LAWS = {
+    "particles.forces.kernels.spring_scatter": "particles.forces.springs.damped_spring_force",
+    "particles.forces.kernels.springs_in_parallel": "particles.forces.springs.damped_spring_force",
+    "particles.forces.kernels.bending_in_parallel": "particles.forces.springs.joint_factor",
+    "particles.forces.kernels.lennard_jones_blocks": "particles.forces.pairs.lennard_jones_virial",
+    "particles.forces.kernels.nbody_pulls": "particles.forces.pairs.gravitational_pull",
+    "particles.massspring.step_kernels.symplectic_euler_steps": "particles.forces.springs.damped_spring_force",
+    "particles.massspring.step_kernels._block_springs": "particles.forces.springs.damped_spring_force",
+    "particles.massspring.step_kernels._block_joints": "particles.forces.springs.joint_factor",
+    "particles.massspring.step_kernels._block_update": "particles.forces.fields.gust_factor",
+    "particles.massspring.step_kernels.clamp_pass": "particles.forces.springs.joint_factor",
+    "particles.constraints.kernels.provot_passes": "particles.constraints.provot.provot_excess",
+    "particles.xpbd.kernels.distance_group": "particles.xpbd.distance.multiplier_step",
+    "particles.xpbd.kernels.distance_jacobi": "particles.xpbd.distance.multiplier_step",
+    "particles.xpbd.kernels.substep": "particles.xpbd.distance.multiplier_step",
+    "particles.xpbd.kernels.distance_violation": "particles.xpbd.distance.distance_constraint",
+    "particles.implicit.kernels.local_step": "particles.implicit.sparse.projection_weight",
+    "particles.collisions.collider_kernels.collider_candidates": "particles.collisions.surfaces.round_height",
+    "particles.collisions.collider_kernels.collider_resolve": "particles.collisions.response.normal_change",
+    "particles.collisions.body_kernels.body_vertices": "particles.collisions.response.friction_change",
+    "particles.collisions.body_kernels.low_edge_samples": "particles.collisions.surfaces.box_height",
+    "particles.collisions.impulse_kernels.proximity_impulses": "particles.collisions.response.proximity_impulse",
+    "particles.collisions.contact_kernels.closest_pairs": "particles.collisions.proximity.triangle_contact",
+    "particles.collisions.contact_kernels.proximity_rows": "particles.collisions.proximity.approaching_within",
+    "particles.collisions.contact_kernels.first_contact_pairs": "particles.collisions.ccd.cubic_of",
+    "particles.collisions.broad_kernels.box_candidates": "particles.collisions.triangle_crossing.intervals_overlap",
+    "particles.collisions.broad_kernels.touching_candidates": "particles.collisions.triangle_crossing.intervals_overlap",
+    "particles.collisions.broad_kernels.kept_pairs": "particles.collisions.triangle_crossing.intervals_overlap",
+}
+
+# The kernels that compute no per-item formula (a gather of indices, a triangular solve), with the NumPy function
+# whose result they reproduce; each one's docstring names it.
+KERNEL_ALGEBRA = {
+    "particles.collisions.broad_kernels.corner_bounds": "particles.collisions.candidates.candidates_in_boxes",
+    "particles.collisions.broad_kernels.key_rows": "particles.collisions.candidates.pair_rows",
+    "particles.implicit.kernels.global_step": "particles.implicit.prefactored.Prefactored._global",
+    "particles.implicit.kernels.gradient_norm": "particles.implicit.prefactored.Prefactored._gradient_norm",
+}
+
+KERNEL_MODULES = sorted(name for name in LIBRARY if name != "particles.backends.compile"
+                        and any(target == "particles.backends.compile" for target, _, _, _ in IMPORTS[name]))
+
+
+@functools.lru_cache(maxsize=None)
+def _functions(module):
+    """The module-level functions of `module`: name -> node."""
+    tree = ast.parse(MODULES[module].read_text(encoding="utf-8"))
+    return {node.name: node for node in tree.body if isinstance(node, ast.FunctionDef)}
+
+
+def _bindings(module):
+    """What the module's ``from ... import`` statements bind: name -> qualified name of the object."""
+    out = {}
+    for target, names, lazy, _ in IMPORTS[module]:
+        if not lazy:
+            out.update({n: f"{target}.{n}" for n in names})
+    return out
+
+
+def _compiled_kernels():
+    """The qualified names of the functions decorated with ``jit(...)`` in the kernels modules."""
+    found = []
+    for module in KERNEL_MODULES:
+        for name, node in _functions(module).items():
+            for decorator in node.decorator_list:
+                func = decorator.func if isinstance(decorator, ast.Call) else decorator
+                if isinstance(func, ast.Name) and func.id == "jit":
+                    found.append(f"{module}.{name}")
+    return found
+
+
+def _reached(kernel):
+    """The qualified names of the functions a kernel calls, through the functions of the kernel modules it calls."""
+    todo, seen, reached = [kernel], set(), set()
+    while todo:  # a walk over the call graph of the kernel modules' functions
+        qualified = todo.pop()
+        module, _, name = qualified.rpartition(".")
+        if qualified in seen or module not in KERNEL_MODULES or name not in _functions(module):
+            continue
+        seen.add(qualified)
+        local, bound = _functions(module), _bindings(module)
+        for node in ast.walk(local[name]):
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
+                callee = f"{module}.{node.func.id}" if node.func.id in local else bound.get(node.func.id)
+                if callee is not None:
+                    reached.add(callee)
+                    todo.append(callee)
+    return reached
+
+
+def test_every_compiled_kernel_is_mapped_to_what_it_computes():
+    """Each compiled kernel is listed once, with the law it inlines or the NumPy function it reproduces."""
+    kernels = _compiled_kernels()
+    assert sorted(set(KERNEL_LAWS) & set(KERNEL_ALGEBRA)) == []
+    assert sorted(kernels) == sorted({**KERNEL_LAWS, **KERNEL_ALGEBRA})
+
+
+@pytest.mark.parametrize("kernel, law", sorted(KERNEL_LAWS.items()))
+def test_each_kernel_inlines_the_law_of_the_numpy_code(kernel, law):
+    """The kernel calls the law, a plain function of a concept's module (not a kernels module), which the NumPy code
+    of the library calls too: one formula, one place."""
+    module, _, name = law.rpartition(".")
+    assert module not in KERNEL_MODULES and name in _functions(module), law
+    assert law in _reached(kernel)
+    numpy_callers = []
+    for other in sorted(LIBRARY - set(KERNEL_MODULES)):  # every function and method of the NumPy code
+        bound = _bindings(other)
+        for node in ast.walk(ast.parse(MODULES[other].read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.FunctionDef) or (other == module and node.name == name):
+                continue
+            names = {n.func.id for n in ast.walk(node) if isinstance(n, ast.Call) and isinstance(n.func, ast.Name)}
+            if any((other == module and n == name) or bound.get(n) == law for n in names):
+                numpy_callers.append(f"{other}.{node.name}")
+    assert numpy_callers, f"no NumPy code calls {law}"
+
+
+@pytest.mark.parametrize("kernel, reference", sorted(KERNEL_ALGEBRA.items()))
+def test_each_kernel_without_a_formula_names_the_numpy_function_it_reproduces(kernel, reference):
+    """A kernel of no per-item formula (a gather, a solve) names in its docstring the NumPy function it reproduces."""
+    module, _, name = kernel.rpartition(".")
+    assert _resolves(reference), reference
+    assert reference.rpartition(".")[2].lstrip("_") in (ast.get_docstring(_functions(module)[name]) or "")
+
+
 def test_long_modules_are_listed_in_the_readme():
     """Every module over 400 lines (library and course tools) is named, with the reason, in the README's layout."""
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
@@ -232,9 +425,9 @@ CONCEPT_TESTS = {
     "test_registry": "the demo registry of particles/demos/__init__.py (DEMOS, register, run_demo), over every demo",
     "test_docstrings": "the numpydoc sections of the demos' and effects' public functions, over several packages",
     "test_solver_contract": "what both implicit solvers (BaraffWitkin, Prefactored) promise, each test over both",
-    "test_steps": "steps in one compiled call: integrators/loop.py's batches through backends/compiled.py's kernel",
-    "test_signatures": "one compiled kernel per argument type, whatever form the callers get: the step of "
-                       "backends/compiled.py, the fixes of fixes.py, the searches of cloth.py",
+    "test_steps": "steps in one compiled call: integrators/loop.py's batches through massspring/compiled_step.py's kernel",
+    "test_signatures": "one compiled kernel per argument type, whatever form the callers get: the compiled step of "
+                       "massspring/, Provot's projection, the collider, the searches of collisions/compiled_stages.py",
 }
 
 
@@ -412,13 +605,12 @@ def _code_lines(path):
             for line in range(token.start[0], token.end[0] + 1) if line not in docs}
 
 
-def test_no_function_of_the_course_tools_or_the_command_line_is_over_80_lines_of_code():
-    """Every function of particles/course/ and particles/cli/ (nested functions counted in their parent) is at most
-    80 lines of code: a long one is a list of steps that want names of their own."""
+def test_no_function_of_the_package_is_over_80_lines_of_code():
+    """Every function of the package, library and course tools alike (nested functions counted in their parent), is
+    at most 80 lines of code: a long one is a list of steps that want names of their own (a fused kernel is made of
+    its concepts' inlined laws, short by construction)."""
     long = []
-    for name, path in MODULES.items():
-        if not name.startswith(("particles.course", "particles.cli")):
-            continue
+    for name, path in sorted(MODULES.items()):
         code = _code_lines(path)
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):

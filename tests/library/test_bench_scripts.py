@@ -91,3 +91,14 @@ def test_every_bench_script_loads(script, monkeypatch):
             del os.environ[name]
         os.environ.update(environment)
     assert callable(getattr(module, "main", None)), f"{script} has no main()"
+
+
+def test_no_bench_script_imports_from_the_tests():
+    """The benches stand alone: no script or helper of bench/ puts tests/ on its path or imports from it."""
+    reaching = []
+    for path in sorted(BENCH.glob("*.py")):
+        text = path.read_text(encoding="utf-8")
+        if re.search(r"^\s*(from|import)\s+tests\b", text, re.M) or re.search(r"sys\.path\.\w+\(.*[\"']tests[\"']", text):
+            reaching.append(path.name)
+    assert reaching == []
+

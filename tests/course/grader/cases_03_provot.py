@@ -309,13 +309,13 @@ CORRECT = {
     # library's colouring), each group corrected at once from the positions the groups before it left.
     "gauss_seidel_by_colour_groups": {
         "replace": {"provot_pass": '''
-from particles.constraints import color_springs
+from particles.constraints import color_constraints
 
 def provot_pass(x, indices, L0, free, max_strain=0.1):
     x = np.array(x, dtype=float)
     ij, L0 = np.asarray(indices), np.asarray(L0, dtype=float)
     free = np.asarray(free, dtype=bool)
-    for g in color_springs(ij, len(x)):               # no particle twice within a group
+    for g in color_constraints(ij, len(x)):               # no particle twice within a group
         (w_i, w_j), (e, u) = end_shares(ij[g], free), spring_excess(x, ij[g], L0[g], max_strain)
         x[ij[g, 0]] += (w_i * e)[:, None] * u
         x[ij[g, 1]] -= (w_j * e)[:, None] * u

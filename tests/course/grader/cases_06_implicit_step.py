@@ -219,7 +219,7 @@ def largest_strain(h, T, kick):
     "library_jacobians": {
         "culprit": "stiffness_matrix",
         "replace": {"stiffness_matrix": '''
-from particles.springs import Springs
+from particles.forces import Springs
 
 def stiffness_matrix(x, ij, k, L0):
     x = np.asarray(x, dtype=float)

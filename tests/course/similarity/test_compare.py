@@ -1,12 +1,10 @@
 """`particles similarity`: submitted functions structurally equal to the library, a master or a classmate."""
 
-import ast
-import copy
 import csv
 import inspect
 import json
-import random
 import re
+import sys
 import textwrap
 from pathlib import Path
 
@@ -18,24 +16,11 @@ from particles.cli import main
 from particles.course.similarity.compare import fingerprint, library_functions, score, similarity
 
 ROOT = Path(__file__).resolve().parents[3]
-EX01, EX00, EX02 = "01_integrator_order", "00_warmup", "02_stiffness"
+sys.path.insert(0, str(ROOT / "bench"))  # the synthetic class, and notebooks made from a master, are the bench's
 
+from synthetic_class import cell_source, notebook, write_synthetic  # noqa: E402
 
-def _source(cell):
-    return "".join(cell["source"]) if isinstance(cell["source"], list) else cell["source"]
-
-
-def notebook(exercise, replace=None, append=()):
-    """The master of `exercise` with the code cell defining each function in `replace` replaced."""
-    nb = json.loads((ROOT / "solutions" / f"{exercise}.ipynb").read_text())
-    for name, code in (replace or {}).items():
-        cell = next(c for c in nb["cells"] if c["cell_type"] == "code" and f"def {name}(" in _source(c))
-        cell["source"] = textwrap.dedent(code).strip("\n")
-    for k, code in enumerate(append):
-        nb["cells"].append({"cell_type": "code", "metadata": {}, "source": textwrap.dedent(code), "outputs": [],
-                            "execution_count": None, "id": f"extra-{k}"})
-    nb["metadata"]["particles"] = {"exercise": exercise}
-    return nb
+EX01, EX00 = "01_integrator_order", "00_warmup"
 
 
 def write(folder, student, exercise, **case):
@@ -103,7 +88,7 @@ def test_renamed_copy_of_the_string_builder_is_identical(tmp_path):
     cell = ("import numpy as np\nfrom particles.massspring import MassSpringSystem\n"
             "from particles.massspring.strands import _chain, _chain_parameters\n"
             "from particles.massspring.model import common_forces\n"
-            "from particles.springs import Springs\n\n"
+            "from particles.forces import Springs\n\n"
             + renamed(particles.massspring.string, names)
             + "\n\ndef run(f, X0, t0, h, n_steps):\n    system = make_chain(3)\n    return system.X, n_steps\n")
     write(tmp_path, "ada", EX00, replace={"run": cell})
@@ -199,7 +184,7 @@ def test_released_stub_and_given_code_are_not_compared(tmp_path):
     for student in ("ada", "bob"):
         (tmp_path / student).mkdir()
         stub = json.loads((ROOT / "exercises" / f"{EX01}.ipynb").read_text())
-        cell = next(c for c in stub["cells"] if "def measured_order(" in _source(c))
+        cell = next(c for c in stub["cells"] if "def measured_order(" in cell_source(c))
         cell["source"] = ("def measured_order(method, f, X0, t0, t1, exact, n_steps):\n"
                           "    return midpoint_wrong_time(f, X0, t0, t1)\n")
         (tmp_path / student / f"{EX01}.ipynb").write_text(json.dumps(stub))
@@ -270,89 +255,6 @@ def test_cli_threshold_must_be_a_number(capsys):
     with pytest.raises(SystemExit) as stop:
         main(["similarity", ".", "--threshold", "abc"])
     assert stop.value.code == 2 and "--threshold" in capsys.readouterr().err
-
-
-# -- synthetic class: many distinct submissions with planted copies (bench/bench_similarity.py times it) --
-
-class _Rename(ast.NodeTransformer):
-    def __init__(self, names):
-        self.names = names
-
-    def visit_Name(self, node):
-        node.id = self.names.get(node.id, node.id)
-        return node
-
-    def visit_arg(self, node):
-        node.arg = self.names.get(node.arg, node.arg)
-        return node
-
-
-def _variant(func, rng, kind):
-    """A student's version of master function `func` (an ast.FunctionDef): renamed, mutated or rewritten."""
-    func = copy.deepcopy(func)
-    params = [a.arg for a in func.args.args]
-    bound = sorted({n.id for n in ast.walk(func) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)})
-    suffix = rng.choice(["_", "1", "_s", "x", "_v"])
-    func = _Rename({n: n + suffix for n in params + bound}).visit(func)
-    params = [a.arg for a in func.args.args]
-    body = func.body[1:] if isinstance(func.body[0], ast.Expr) else func.body
-    if kind == "mutated":
-        for _ in range(rng.randint(1, 3)):
-            p, q, c = rng.choice(params), rng.choice(params), round(rng.uniform(0.1, 9.0), 2)
-            extra = rng.choice([f"assert {p} is not None", f"tmp_{len(body)} = np.asarray({p}, dtype=float)",
-                                f"{p} = {c} * {p}", f"print({p}, {q})", f"w_{len(body)} = np.sum({p}) + {c}",
-                                f"if {p} is None:\n    return None"])
-            body.insert(rng.randrange(len(body)), ast.parse(extra).body[0])
-        for node in ast.walk(ast.Module(body, [])):
-            if isinstance(node, ast.Constant) and isinstance(node.value, float) and rng.random() < 0.3:
-                node.value = round(node.value * rng.uniform(0.5, 2.0), 3)
-    elif kind == "rewritten":
-        body = []
-        for j in range(rng.randint(3, 7)):
-            p, q, c = rng.choice(params), rng.choice(params), rng.randint(1, 9)
-            body.append(ast.parse(rng.choice([
-                f"a{j} = np.zeros({c}) + {p}", f"for i{j} in range({c}):\n    {p} = {p} + i{j} * {q}",
-                f"b{j} = [{p} for _ in range({c})]", f"if {p} > {q}:\n    {p}, {q} = {q}, {p}",
-                f"c{j} = np.maximum({p}, {q}) ** {c}", f"while {p} < {c}:\n    {p} = {p} * 2",
-                f"d{j} = {{'{p}': {q}, 'n': {c}}}", f"e{j} = np.linalg.norm(np.atleast_1d({p}))"])).body[0])
-        body.append(ast.parse(f"return {rng.choice(params)}").body[0])
-    func.body = func.body[:1] + body if isinstance(func.body[0], ast.Expr) else body
-    return ast.unparse(func)
-
-
-def write_synthetic(folder, n=300, exercise=EX02, seed=0, copies=10):
-    """Write `n` submissions of `exercise`: a third close to the master, the rest mutated or rewritten.
-
-    The first `copies` students copy every asked function of the student `n // 2 + k` (renamed; every other
-    one with an extra line). Returns the planted pairs ``(copier, source)``.
-    """
-    rng = random.Random(seed)
-    master = notebook(exercise)
-    code = {}
-    for cell in master["cells"]:
-        if cell["cell_type"] == "code" and "### BEGIN SOLUTION" in _source(cell):
-            func = next(s for s in ast.parse(_source(cell)).body if isinstance(s, ast.FunctionDef))
-            code[func.name] = func
-    students = {}
-    for k in range(n):
-        students[k] = {name: _variant(func, rng, rng.choices(["renamed", "mutated", "rewritten"], [3, 5, 2])[0])
-                       for name, func in code.items()}
-    planted = []
-    for k in range(copies):
-        source = n // 2 + k
-        for name, text in students[source].items():
-            copied = _variant(ast.parse(text).body[0], rng, "renamed")
-            if k % 2:
-                lines = copied.split("\n")
-                lines.insert(len(lines) - 1, "    assert True, 'checked'")  # one extra line before the last
-                copied = "\n".join(lines)
-            students[k][name] = copied
-        planted.append((f"student{k:03d}", f"student{source:03d}"))
-    folder.mkdir(parents=True, exist_ok=True)
-    for k, functions in students.items():
-        (folder / f"student{k:03d}").mkdir()
-        (folder / f"student{k:03d}" / f"{exercise}.ipynb").write_text(json.dumps(notebook(exercise, replace=functions)))
-    return planted
 
 
 def test_planted_copies_are_found_among_many_distinct_submissions(tmp_path):

@@ -24,13 +24,13 @@ def on_thread_counts(monkeypatch, run):
     """
     import numba
 
-    from particles.backends import _kernels
+    from particles.backends import compile as kernels
 
     results = []
     before = numba.get_num_threads()
     try:
         for threads, parallel_min in ((1, 0), (min(2, numba.config.NUMBA_NUM_THREADS), 0), (1, 10**9)):
-            monkeypatch.setattr(_kernels, "PARALLEL_MIN", parallel_min)  # 0: every loop parallel; 10**9: none
+            monkeypatch.setattr(kernels, "PARALLEL_MIN", parallel_min)  # 0: every loop parallel; 10**9: none
             numba.set_num_threads(threads)
             results.append(run())
     finally:

@@ -39,12 +39,12 @@ def _stretched(c):
 def test_the_compiled_step_reads_a_fortran_ordered_state_without_a_kernel_of_its_own():
     """A step from a C-ordered state (the compiled step's own) and from the same state in F order (a NumPy
     step's, or set_state's): one kernel, the same bits."""
-    from particles.backends._step_kernels import symplectic_euler_steps
+    from particles.massspring.step_kernels import symplectic_euler_steps
 
     c = cloth(8, 8, scaling="physical", damping=0.05)
     X = _stretched(c)
     with backends.using("numba"):
-        step = backends.compiled_step(c)
+        step = c.compiled_step()
         c_step = step.symplectic_euler(np.ascontiguousarray(X), 0.0, 1e-4)  # the C-ordered variant from here on
         before = _variants(symplectic_euler_steps)
         f_step = step.symplectic_euler(np.asfortranarray(X), 0.0, 1e-4)
@@ -56,12 +56,12 @@ def test_the_compiled_step_reads_a_fortran_ordered_state_without_a_kernel_of_its
 def test_provot_corrects_a_fortran_ordered_state_in_place_without_kernels_of_its_own(method):
     """Provot's pass on an F-ordered state (a NumPy step's) and on the same state in C order (the compiled step's):
     no new kernel, the F-ordered array corrected in place, the same bits."""
-    from particles.backends import _provot_kernels as pk
-    from particles.backends.fixes import provot
+    from particles.constraints.kernels import CompiledProjection, provot_passes
 
-    kernels = [pk.provot_strains, pk.provot_start, pk.provot_end, pk.provot_average, pk.provot_group]
+    kernels = [provot_passes]
     c = cloth(8, 8, scaling="physical")
     constraint = ProvotConstraint.from_system(c, method=method, backend="numba")
+    provot = lambda constraint, X, h: CompiledProjection(constraint).project(X, h)  # noqa: E731
     X_c = np.ascontiguousarray(_stretched(c))
     provot(constraint, X_c.copy(), 1e-3)  # the C-ordered variants exist from here on
     before = _variants(*kernels)
@@ -76,8 +76,8 @@ def test_provot_corrects_a_fortran_ordered_state_in_place_without_kernels_of_its
 def test_the_collider_fixes_a_fortran_ordered_state_in_place_without_kernels_of_its_own():
     """A sheet's end state inside a ball, in F order (a NumPy step's) and in C order (the compiled step's): no
     new kernel, the F-ordered array fixed in place, the same bits and the same contacts."""
-    from particles.backends import _collider_kernels as ck
-    from particles.backends.fixes import collide
+    from particles.collisions import collider_kernels as ck
+    from particles.collisions.collider_kernels import collide
 
     c = cloth(8, 8, scaling="physical")
     collider = Collider(Sphere([0.5, 0.32, -0.5], 0.3), restitution=0.0, friction=0.3)  # 2 cm off the sheet
@@ -101,8 +101,8 @@ def test_the_collider_fixes_a_fortran_ordered_state_in_place_without_kernels_of_
 def test_vertex_face_and_edge_edge_searches_share_one_kernel():
     """The vertices' one-vertex elements are read-only like the mesh's faces and edges: the vertex-face and the
     edge-edge searches (with and without a mask) run the same compiled kernels."""
-    from particles.backends import _broad_kernels as bk
-    from particles.backends import cloth as compiled_cloth
+    from particles.collisions import broad_kernels as bk
+    from particles.collisions import compiled_stages as compiled_cloth
 
     mesh = TriangleMesh.grid(6, 6)
     assert not compiled_cloth._own(mesh.n).flags.writeable and not mesh.edges.flags.writeable

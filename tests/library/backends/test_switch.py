@@ -8,7 +8,7 @@ import pytest
 
 from particles import backends
 from particles.forces import LennardJones
-from particles.springs import Springs
+from particles.forces import Springs
 
 from .helpers import needs_numba
 
@@ -27,7 +27,7 @@ def spy(monkeypatch, owner, name, calls):
 
 def test_import_particles_does_not_import_numba():
     """numba is loaded only by a force pass that uses it, never by ``import particles`` or the NumPy backend."""
-    code = ("import sys, numpy as np, particles; from particles.springs import Springs; "
+    code = ("import sys, numpy as np, particles; from particles.forces import Springs; "
             "Springs([[0, 1]], 1.0, k=2.0)(np.array([[0.0, 0.0], [2.0, 0.0]])); print('numba' in sys.modules)")
     env = dict(os.environ, PARTICLES_BACKEND="numpy")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
@@ -62,16 +62,17 @@ def test_the_grader_workers_never_compile():
 @pytest.mark.parametrize("side, compiled", [(31, False), (32, True)])
 def test_auto_compiles_xpbd_from_1024_particles(monkeypatch, side, compiled):
     """"auto" runs XPBD's substeps compiled from 1024 particles (a 32 x 32 sheet), NumPy below (31 x 31)."""
-    from particles.backends.xpbdstep import CompiledSubstep  # noqa: PLC0415
     from particles.massspring import cloth  # noqa: PLC0415
     from particles.xpbd import XPBD  # noqa: PLC0415
+    from particles.xpbd.compiled_substep import CompiledSubstep  # noqa: PLC0415
+    from particles.xpbd.solver import XPBD_WEIGHT  # noqa: PLC0415
 
     fresh_environment(monkeypatch)
     calls = []
     spy(monkeypatch, CompiledSubstep, "substep", calls)
     c = cloth(side, side, scaling="physical")
     c.run(0.01, 0.01, method=XPBD.from_system(c, substeps=2, backend="auto"))
-    assert backends.XPBD_WEIGHT * 1024 == backends.AUTO_MIN
+    assert XPBD_WEIGHT * 1024 == backends.AUTO_MIN
     assert len(calls) == (2 if compiled else 0)
 
 
@@ -81,8 +82,9 @@ def test_auto_compiles_the_cloth_collisions_from_64_vertices(monkeypatch, side, 
     """"auto" runs every stage of ClothCollisions compiled from 64 vertices (an 8 x 8 sheet), NumPy below."""
     import numpy as np  # noqa: PLC0415
 
-    from particles.backends import compiled as kernels  # noqa: PLC0415
     from particles.collisions import ClothCollisions, Plane, TriangleMesh  # noqa: PLC0415
+    from particles.collisions import compiled_stages as kernels  # noqa: PLC0415
+    from particles.collisions.candidate_cache import CLOTH_COLLISION_WEIGHT  # noqa: PLC0415
 
     fresh_environment(monkeypatch)
     calls = []
@@ -94,21 +96,21 @@ def test_auto_compiles_the_cloth_collisions_from_64_vertices(monkeypatch, side, 
     cc = ClothCollisions(TriangleMesh.grid(side, side), 0.005, bodies=[Plane([0, 0, 0.0], [0, 0, 1.0])],
                          backend="auto")
     cc.resolve(x0, x1, (x1 - x0) / 0.01, 0.0, 0.01)
-    assert backends.CLOTH_COLLISION_WEIGHT * 64 == backends.AUTO_MIN
+    assert CLOTH_COLLISION_WEIGHT * 64 == backends.AUTO_MIN
     assert sorted(set(calls)) == (["cloth_candidate_rows", "cloth_first_contacts", "cloth_impulses", "cloth_proximity"]
                                   if compiled else [])
 
 
 def test_auto_falls_back_to_numpy_when_numba_cannot_load(monkeypatch):
     """With numba unusable, 'auto' warns and uses NumPy from then on; an explicit 'numba' raises."""
-    monkeypatch.delattr(backends, "compiled", raising=False)
-    monkeypatch.setitem(sys.modules, "particles.backends.compiled", None)  # importing it now fails
+    monkeypatch.delattr(backends, "compile", raising=False)
+    monkeypatch.setitem(sys.modules, "particles.backends.compile", None)  # importing it now fails
     monkeypatch.setitem(backends._state, "broken", False)
     with pytest.warns(RuntimeWarning, match="numba could not be loaded"):
-        assert backends.kernels_for("auto", 10**6) is None
+        assert backends.compiled("auto", 10**6) is False
     assert backends.resolve("auto", 10**6) == "numpy"
     with pytest.raises(ImportError):
-        backends.kernels_for("numba", 10)
+        backends.compiled("numba", 10)
 
 
 def test_the_global_switch_applies_to_objects_built_before_it():
@@ -135,8 +137,8 @@ def test_bad_backends_are_refused_with_a_clear_message(monkeypatch):
     assert backends.resolve("auto", 10**9) == "numpy"
 
 
-_LAYER = ("import os, numpy as np, numba, particles.backends._kernels as k; "
-          "from particles.backends._pbd_kernels import distance_violation as v; "
+_LAYER = ("import os, numpy as np, numba, particles.backends.compile as k; "
+          "from particles.xpbd.kernels import distance_violation as v; "
           "x = np.random.rand(3, 9000); ij = np.stack([np.arange(8999), np.arange(1, 9000)], 1).astype(np.int32); "
           "v(x, ij, np.ones((8999, 4)), np.empty(8999)); "
           "print(numba.threading_layer(), os.environ.get('GOMP_SPINCOUNT'))")

@@ -8,7 +8,7 @@ from particles.constraints import ProvotConstraint
 from particles.implicit import Prefactored
 from particles.integrators import symplectic_euler
 from particles.massspring import MassSpringSystem, cloth
-from particles.springs import Springs
+from particles.forces import Springs
 from particles.collisions import Cylinder, Plane, Sphere
 from particles.xpbd import XPBD
 

@@ -8,7 +8,7 @@ from particles.constraints import ProvotConstraint
 from particles.integrators import symplectic_euler
 from particles.massspring import MassSpringSystem, cloth
 from particles.neighbors import all_pairs
-from particles.springs import Springs
+from particles.forces import Springs
 
 DX = 0.05  # grid spacing of the test sheets, m
 THICKNESS = 0.8 * DX  # > DX / sqrt(2): no particle fits through the centre of a cell

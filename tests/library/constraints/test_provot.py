@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from particles.constraints import ProvotConstraint, color_springs, provot_projection
+from particles.constraints import ProvotConstraint, color_constraints, provot_projection
 from particles.integrators import symplectic_euler
 from particles.massspring import cloth
 
@@ -75,7 +75,7 @@ def test_spring_colouring_groups_are_independent_and_complete():
     """The colour groups hold every spring once and no particle twice within a group."""
     c = cloth(8, 7)
     idx = c.spring_indices()
-    groups = color_springs(idx, c.n, seed=3)
+    groups = color_constraints(idx, c.n, seed=3)
     assert np.array_equal(np.sort(np.concatenate(groups)), np.arange(len(idx)))
     for g in groups:
         ends = idx[g].ravel()

@@ -18,9 +18,8 @@ import pytest
 import particles
 from particles.constraints import RigidRods
 from particles.effects import Boids, Containment
-from particles.forces import (Attractor, Damping, Field, Force, Gravity, LennardJones, NBodyGravity, SurfaceWind,
-                              Vortex, Wind)
-from particles.springs import Bending, Clamp, Springs
+from particles.forces import (Attractor, Bending, Clamp, Damping, Field, Force, Gravity, LennardJones, NBodyGravity,
+                              Springs, SurfaceWind, Vortex, Wind)
 
 N = 12  # particles of every test configuration
 

@@ -135,7 +135,7 @@ def test_two_pinned_root_particles_clamp_half_a_segment_in():
 
 def test_hair_root_clamp_structure():
     """The default clamp pins the root only and holds the first segment along the hair's direction."""
-    from particles.springs import Clamp
+    from particles.forces import Clamp
 
     h = hair(6, 0.3, direction=[0.0, -1.0])
     assert h.pinned.tolist() == [0]

@@ -7,7 +7,8 @@ from particles import Collider, ParticleSystem
 from particles.collisions import Plane, Sphere
 from particles.forces import Gravity
 from particles.massspring import cloth, string
-from particles.xpbd import PBD, XPBD, Attachment, Distance, IsometricBending, color_constraints, distance_pass
+from particles.constraints import color_constraints
+from particles.xpbd import PBD, XPBD, Attachment, Distance, IsometricBending, distance_pass
 
 G = 9.81
 

@@ -1,0 +1,326 @@
+"""The cloth collision pipeline's compiled stages (numba): broad phase, proximity, the continuous test.
+
+:class:`particles.collisions.ClothCollisions` and its
+:class:`~particles.collisions.candidate_cache.CandidateCache` call these (through
+:func:`particles.backends.compiled`) when their backend resolves to
+numba. Each returns what the NumPy stage it replaces returns:
+
+* :func:`cloth_candidates`: the candidate pairs of
+  :func:`particles.collisions.candidates.candidates_in_boxes` (the same
+  sorted sets: a bucket grid walked box by box, :mod:`particles.collisions.broad_kernels`);
+  :meth:`~particles.collisions.candidate_cache.CandidateCache.pairs` searches each call's own boxes with it,
+  which gives the rows its cache would (the cache only ever holds more pairs than the boxes select); a
+  masked search that touches few elements tests them against every box instead of building a grid
+  (:func:`particles.collisions.broad_kernels.touching_candidates`), and a search within the boxes of an
+  earlier one filters that search's pairs (:func:`particles.collisions.broad_kernels.kept_pairs`) and
+  searches again only around the vertices that left them;
+* :func:`cloth_closest`, :func:`cloth_first_contacts`: the closest points
+  of :mod:`particles.collisions.proximity` and the continuous test of
+  :mod:`particles.collisions.ccd`, pair by pair (:mod:`particles.collisions.contact_kernels`);
+* :func:`cloth_body_vertices`, :func:`cloth_low_edge_samples`: the bodies' vertex pass and the test of
+  their edge samples, for primitives at rest (:mod:`particles.collisions.body_kernels`);
+* :func:`cloth_impulses`: the Jacobi iterations of the proximity impulses, with the bodies' vertex pass
+  after each when the bodies are primitives at rest (:mod:`particles.collisions.impulse_kernels`).
+
+Each kernel inlines the formulas of the NumPy stage it replaces (the
+contacts' impulses of :mod:`particles.collisions.response`, the boxes'
+overlap of :mod:`particles.collisions.triangle_crossing`). The pipeline loads
+this module through :func:`particles.collisions.candidates.compiled_stages`
+and passes its constants; importing it imports numba.
+"""
+
+import numpy as np
+
+from ..backends.compile import pick
+from .body_kernels import body_vertices, low_edge_samples
+from .broad_kernels import box_candidates, corner_bounds, key_rows, kept_pairs, touching_candidates
+from .collider_kernels import surface_rows
+from .contact_kernels import closest_pairs, first_contact_pairs, proximity_rows
+from .impulse_kernels import BLOCKS, proximity_impulses
+
+__all__ = ["cloth_candidates", "cloth_candidate_rows", "cloth_closest", "cloth_proximity", "cloth_first_contacts",
+           "cloth_impulses", "cloth_body_vertices", "cloth_low_edge_samples", "surface_rows"]
+
+_EMPTY_MASK = np.zeros(0, dtype=np.bool_)
+
+# a box query walks the cells its box covers and tests their boxes: the work of about this many items of pick's
+# threshold (a spring's force); 1k vertices or edges already pay for the threads (a 32^2 sheet: 2 ms a search)
+QUERY_WEIGHT = 16
+
+# the Jacobi iterations sum each vertex's terms in slices of at least this many active contacts (at most
+# impulse_kernels.BLOCKS, each on one thread): below twice as many, in one slice, in np.bincount's order
+JACOBI_PART_MIN = 4096
+
+# an unmasked search may take its pairs from the memo of an earlier one when at most one vertex in this many
+# left that search's boxes (the pairs of those vertices are searched again: a masked search)
+LEFT_MAX = 64
+
+# a grid search costs about as much as this many box tests per query and target (building the grid and its
+# tables, walking the cells): a masked search that needs fewer tests element against element makes none
+GRID_TESTS = 64
+
+
+def _corners(v_lo, v_hi, idx):
+    lo, hi = np.empty((len(idx), 3)), np.empty((len(idx), 3))
+    corner_bounds(v_lo, v_hi, idx, lo, hi)
+    return lo, hi
+
+
+def _keys(mesh, lo, hi, pad, vertices, memo=None):
+    """The sorted keys ``iv m + jf`` and ``ie e + je`` of :func:`cloth_candidates`' pairs (None where none).
+
+    With a `memo` (see :func:`cloth_candidate_rows`), taken from the pairs of its earlier search when the
+    boxes allow it, and kept there after a search without a mask.
+    """
+    v_lo = np.ascontiguousarray(lo - pad)
+    v_hi = np.ascontiguousarray(hi + pad)
+    if vertices is None and memo is not None and memo.get("v_lo") is not None and memo["v_lo"].shape == v_lo.shape:
+        left = np.any((v_lo < memo["v_lo"]) | (v_hi > memo["v_hi"]), axis=1)
+        if int(left.sum()) * LEFT_MAX <= mesh.n:
+            return _kept_keys(mesh, v_lo, v_hi, memo, left)
+    mask = _EMPTY_MASK if vertices is None else np.ascontiguousarray(vertices, dtype=np.bool_)
+    wanted = (len(mesh.faces) > 0 and mesh.n > 0, len(mesh.edges) > 1)
+    vf, ee = (_search(*_boxes(v_lo, v_hi, Q, T, same), Q, T, same, mask, vertices is not None) if want else None
+              for (Q, T, same), want in zip(_kinds(mesh), wanted))  # the two kinds of pairs
+    if memo is not None and vertices is None:
+        memo.update(v_lo=v_lo, v_hi=v_hi, vf=vf, ee=ee)
+    return vf, ee
+
+
+def _kept_keys(mesh, v_lo, v_hi, memo, left):
+    """:func:`_keys` from the memo's pairs: those still overlapping, and a search around the vertices `left`.
+
+    Every vertex outside `left` has its padded box within the one of the memo's search, so a pair of
+    them that overlaps now overlapped then and is among the memo's keys; the pairs that hold a vertex of
+    `left` are searched again (a masked search), and both sorted lists are merged.
+    """
+    out = []
+    for keys, (Q, T, same) in zip((memo["vf"], memo["ee"]), _kinds(mesh)):  # the two kinds of pairs
+        if keys is None:
+            out.append(None)
+            continue
+        q_lo, q_hi, t_lo, t_hi = _boxes(v_lo, v_hi, Q, T, same)
+        keep = np.empty(len(keys), dtype=np.bool_)
+        pick(kept_pairs, len(keys))(keys, len(T), Q, T, q_lo, q_hi, t_lo, t_hi, left, keep)
+        found = keys[keep]
+        if left.any():
+            again = _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, left, True)
+            found = np.insert(found, np.searchsorted(found, again), again)  # disjoint sorted lists, merged
+        out.append(found)
+    return tuple(out)
+
+
+def _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
+    """Keys of the overlapping pairs: the grid of :func:`box_candidates`, or, for a mask that touches few
+    elements, every masked element tested against all (:func:`touching_candidates`, no grid to build)."""
+    if masked:
+        q_in, t_in = mask[Q].any(axis=1), mask[T].any(axis=1)
+        t_list = np.flatnonzero(t_in)
+        if int(q_in.sum()) * len(T) + len(Q) * len(t_list) <= GRID_TESTS * (len(Q) + len(T)):
+            keys = pick(touching_candidates, QUERY_WEIGHT * len(Q))(q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in,
+                                                                    t_list)
+            keys.sort()  # each pair is found once, by one row
+            return keys
+    return pick(box_candidates, QUERY_WEIGHT * len(Q))(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked)
+
+
+def _own(n):
+    """Each vertex as a one-vertex element: ``[[0], [1], ..., [n - 1]]``, read-only like the mesh's faces and
+    edges, so that the kernels see one type of element array (numba compiles a kernel for each)."""
+    own = np.arange(n, dtype=np.int64)[:, None]
+    own.setflags(write=False)
+    return own
+
+
+def _kinds(mesh):
+    """The two kinds of pairs, each ``(Q, T, same)``: vertices against faces, then edges against edges."""
+    return (_own(mesh.n), mesh.faces, False), (mesh.edges, mesh.edges, True)
+
+
+def _boxes(v_lo, v_hi, Q, T, same):
+    """Query and target boxes ``q_lo, q_hi, t_lo, t_hi`` of a kind of pairs from the padded vertex boxes."""
+    t_lo, t_hi = _corners(v_lo, v_hi, T)
+    return (t_lo, t_hi, t_lo, t_hi) if same else (v_lo, v_hi, t_lo, t_hi)
+
+
+def cloth_candidates(mesh, lo, hi, pad, vertices=None):
+    """:func:`particles.collisions.candidates.candidates_in_boxes`, compiled: ``iv, jf, ie, je`` (int64, sorted).
+
+    Parameters
+    ----------
+    mesh : TriangleMesh
+    lo, hi : ndarray, shape (n, 3)
+        Each vertex's box, in metres (inflated by `pad` here; faces and edges get the union of theirs).
+    pad : float
+        In metres.
+    vertices : ndarray of bool, shape (n,), optional
+        Only pairs that hold one of these vertices.
+    """
+    vf, ee = _keys(mesh, lo, hi, pad, vertices)
+    empty = np.zeros(0, dtype=np.int64)
+    iv, jf = (empty, empty) if vf is None else np.divmod(vf, len(mesh.faces))
+    ie, je = (empty, empty) if ee is None else np.divmod(ee, len(mesh.edges))
+    return iv, jf, ie, je
+
+
+def cloth_candidate_rows(mesh, lo, hi, pad, vertices=None, memo=None):
+    """:func:`cloth_candidates` as :func:`particles.collisions.candidates.pair_rows` gives them: ``vf, ee``.
+
+    The vertex-face rows ``(vertex, a, b, c)`` and the edge-edge rows ``(p_1, p_2, q_1, q_2)``, shape
+    (k, 4) each, int64, in the order of the sorted keys; the arguments as :func:`cloth_candidates`, and
+
+    memo : dict, optional
+        Kept by the caller from call to call (:class:`~particles.collisions.candidate_cache.CandidateCache`
+        keeps one): the padded vertex boxes and the pairs of the last search without a mask. When at
+        most one vertex in ``LEFT_MAX`` has a padded box outside its box there, the pairs are taken from
+        that search's (those whose boxes still overlap) and only the pairs holding a vertex that left are
+        searched again: the continuous test's searches within the boxes of the step's proximity search
+        filter its pairs instead of building a grid. The pairs are the same either way.
+    """
+    vf, ee = _keys(mesh, lo, hi, pad, vertices, memo)
+    out = []
+    for keys, (Q, T, _) in zip((vf, ee), _kinds(mesh)):  # the two kinds of pairs
+        rows = np.empty((0 if keys is None else len(keys), 4), dtype=np.int64)
+        if len(rows):
+            pick(key_rows, len(rows))(keys, len(T), np.ascontiguousarray(Q, dtype=np.int64),
+                                      np.ascontiguousarray(T, dtype=np.int64), rows)
+        out.append(rows)
+    return tuple(out)
+
+
+def cloth_closest(x, rows, edge, parallel_tol):
+    """Closest points of the pairs `rows` (k, 4) of points `x` (n, 3): ``distance, normal, weights``.
+
+    :func:`particles.collisions.proximity.vertex_face` (or, with `edge`, ``edge_edge``) pair by pair,
+    with the NumPy code's arithmetic.
+    """
+    k = len(rows)
+    distance, normal, weights = np.empty(k), np.empty((k, 3)), np.empty((k, 4))
+    pick(closest_pairs, k)(np.ascontiguousarray(x), rows, edge, parallel_tol, distance, normal, weights)
+    return distance, normal, weights
+
+
+def cloth_proximity(x0, vbar, w, x_rest, rows, edge, h, thickness, rest_distance, parallel_tol):
+    """The proximity contacts among candidate `rows`: ``rows, weights, normals, distances`` of those kept.
+
+    A pair is kept when it is closer than `thickness` at `x0` or would end closer along its normal, has
+    a finite effective mass, (edges) its closest points are not an edge's ends, and (with `x_rest`) it is
+    at least `rest_distance` apart at rest: the tests of ``ClothCollisions._proximity_contacts``.
+    """
+    k = len(rows)
+    keep = np.empty(k, dtype=np.bool_)
+    distance, normal, weights = np.empty(k), np.empty((k, 3)), np.empty((k, 4))
+    rest = x_rest is not None
+    xr = np.ascontiguousarray(x_rest) if rest else np.zeros((0, 3))
+    pick(proximity_rows, k)(np.ascontiguousarray(x0), np.ascontiguousarray(vbar), w, xr, rest, rows, edge,
+                            float(h), thickness, rest_distance, parallel_tol, keep, distance, normal, weights)
+    return rows[keep], weights[keep], normal[keep], distance[keep]
+
+
+def cloth_first_contacts(x0, dx, rows, edge, eta, ftol, bisections, parallel_tol):
+    """:func:`particles.collisions.ccd.first_contacts` on candidate `rows` of the mesh, pair by pair.
+
+    Returns the rows that touch during the step, their weights (k, 4), normals (k, 3) and times (k,).
+    """
+    k = len(rows)
+    hit = np.empty(k, dtype=np.bool_)
+    time, normal, weights = np.empty(k), np.empty((k, 3)), np.empty((k, 4))
+    pick(first_contact_pairs, k)(np.ascontiguousarray(x0), np.ascontiguousarray(dx), rows, edge, eta, ftol,
+                                 bisections, parallel_tol, hit, time, normal, weights)
+    return rows[hit], weights[hit], normal[hit], time[hit]
+
+
+_NO_BODIES = (np.zeros(0, dtype=np.int64), np.zeros((0, 13)))
+
+
+def cloth_impulses(vbar, x0, V, W, N, S, target, w, h, tol, friction, iterations, thickness, bodies=None,
+                   relaxation=1.0, start=0):
+    """Jacobi iterations of the proximity impulses on `vbar` (n, 3), in place: ``ClothCollisions._proximity``.
+
+    Parameters
+    ----------
+    vbar : ndarray, shape (n, 3)
+        The step's average velocities, in m/s (changed in place).
+    x0 : ndarray, shape (n, 3)
+        Positions at the start of the step, in metres.
+    V, W, N, S, target : ndarray
+        The contacts: vertices (k, 4), weights (k, 4), unit normals (k, 3), ``sum_j W_j^2 w_j`` (k,) and
+        target normal velocities (k,), in m/s.
+    w : ndarray, shape (n,)
+        Inverse masses, in 1/kg (0 for pinned vertices).
+    h : float
+        Step, in seconds.
+    tol : float
+        A contact is active while its normal velocity is more than ``tol / h`` below its target (metres).
+    friction : float
+        Coulomb coefficient.
+    iterations : int
+        Most iterations; fewer when one finds no active contact.
+    thickness : float
+        Distance kept from the bodies, in metres.
+    bodies : tuple (kinds, rows), optional
+        Bodies at rest as :func:`particles.collisions.collider_kernels.surface_rows` gives them: after each iteration
+        the free vertices of its active contacts are moved out of them.
+    relaxation : float
+        Over-relaxation (>= 1): from the pipeline's second iteration on, a contact's impulse is divided
+        by ``max(load / relaxation, 1)`` instead of ``max(load, 1)`` (``ClothCollisions``' `relaxation`).
+    start : int
+        Number of iterations the pipeline already made (0: this call's first iteration averages plainly).
+
+    Returns
+    -------
+    done : int
+        Iterations that gave impulses.
+    touched : ndarray of bool, shape (k,)
+        The contacts that got an impulse.
+    active : ndarray of bool, shape (k,)
+        Those of the last iteration.
+    """
+    k, n = len(V), len(vbar)
+    kinds, rows = _NO_BODIES if bodies is None else bodies
+    touched, active = np.zeros(k, dtype=np.bool_), np.zeros(k, dtype=np.bool_)
+    order, impulse, load = np.empty(k, dtype=np.int64), np.empty((k, 3)), np.empty(n)
+    part_load, part_hit = np.empty((BLOCKS, n)), np.empty((BLOCKS, n), dtype=np.bool_)
+    part_vel = np.empty((BLOCKS, n, 3))
+    done = pick(proximity_impulses, max(k, n))(vbar, np.ascontiguousarray(x0), V, W, N, S, target, w, float(h),
+                                                 float(tol), float(friction), float(relaxation), int(start),
+                                                 int(iterations), float(thickness), kinds, rows,
+                                                 int(JACOBI_PART_MIN), touched, active, order, impulse, load,
+                                                 part_load, part_hit, part_vel)
+    return done, touched, active
+
+
+def cloth_body_vertices(x0, vbar, free, h, thickness, friction, bodies):
+    """``BodyStage._bodies``' vertex pass for bodies at rest: `free` vertices moved out of their thickness.
+
+    Parameters
+    ----------
+    x0, vbar : ndarray, shape (n, 3)
+        Start positions (m) and the step's average velocities (m/s, changed in place).
+    free : ndarray of bool, shape (n,)
+        The vertices treated.
+    h, thickness, friction : float
+        Step (s), distance kept (m), Coulomb coefficient.
+    bodies : tuple (kinds, rows)
+        As :func:`particles.collisions.collider_kernels.surface_rows` gives them (one body, or several in turn).
+
+    Returns
+    -------
+    int
+        Vertex-body pairs closer than `thickness` at the end of the step (NumPy's count).
+    """
+    kinds, rows = bodies
+    return int(pick(body_vertices, len(vbar))(np.ascontiguousarray(x0), vbar, np.ascontiguousarray(free), float(h),
+                                              float(thickness), float(friction), kinds, rows))
+
+
+def cloth_low_edge_samples(x0, vbar, h, edges, w, samples, target, body):
+    """Edge samples that end closer than `target` to one body at rest and can move (``BodyStage._edges_out``).
+
+    `edges` (e, 2), inverse masses `w` (n,), `samples` the fractions along each edge, `body` a pair
+    ``(kind, row)`` of :func:`particles.collisions.collider_kernels.surface_rows`' table. Returns their count.
+    """
+    kind, row = body
+    return int(pick(low_edge_samples, QUERY_WEIGHT * len(edges))(np.ascontiguousarray(x0), vbar, float(h), edges, w,
+                                                                 np.asarray(samples, dtype=float), float(target),
+                                                                 int(kind), row))
