@@ -3,8 +3,8 @@
 :class:`particles.implicit.Prefactored` with the numba backend calls these in
 place of its NumPy methods; the Anderson-accelerated iteration around them is
 the same code. What does not change between iterations (the spring arrays,
-the Cholesky factor from SuperLU's symmetric factorization as plain arrays (:func:`cholesky_factor`), the matrix ``M + h^2 L`` in CSR) is built
-once per factorization, in :class:`FactoredKernels`. Importing this module
+the Cholesky factor from SuperLU's symmetric factorization as plain arrays
+(:func:`cholesky_factor`), the matrix ``M + h^2 L`` in CSR) is built once per factorization, in :class:`FactoredKernels`. Importing this module
 imports numba; :class:`~particles.implicit.Prefactored` imports it when its
 backend resolves to numba (:func:`particles.backends.compiled`).
 
