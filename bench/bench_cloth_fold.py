@@ -31,6 +31,7 @@ XPBD from 1024 particles, :data:`particles.xpbd.solver.XPBD_WEIGHT`);
     python bench/bench_cloth_fold.py --n 32 --compare   # NumPy against numba
     python bench/bench_cloth_fold.py --xpbd-sizes       # XPBD alone per size: where "auto" compiles it
     python bench/bench_cloth_fold.py --n 32 --peer newton --steps 20 --no-baseline   # beside Newton's VBD
+    python bench/bench_cloth_fold.py --one-thread       # on a host whose cores are busy with other work
 """
 
 import argparse
@@ -42,6 +43,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
+from particles.backends import available  # noqa: E402
 from particles.collisions import ClothCollisions  # noqa: E402
 from particles.collisions import intersections  # noqa: E402
 from particles.massspring import cloth  # noqa: E402
@@ -181,6 +183,8 @@ def main(argv=None):
     parser.add_argument("--n", type=int, default=64, help="particles per side (default 64)")
     parser.add_argument("--seconds", type=float, default=2.0, help="simulated time (default 2 s)")
     parser.add_argument("--steps", type=int, default=None, help="steps to take (overrides --seconds)")
+    parser.add_argument("--one-thread", action="store_true",
+                        help="every compiled loop on one thread (a shared host: other work on its cores)")
     parser.add_argument("--peer", choices=["newton"], default=None,
                         help="also step the same sheet with Newton's VBD solver and self-contact (CPU)")
     parser.add_argument("--backend", default="auto", choices=["auto", "numpy", "numba"],
@@ -197,12 +201,21 @@ def main(argv=None):
         if args.steps < 1:
             parser.error(f"--steps must be at least 1, got {args.steps}")
         args.seconds = args.steps * H
+    if args.one_thread:
+        import particles.backends.compile as kernels  # noqa: PLC0415
+
+        kernels.PARALLEL_MIN = 10**9  # what pick() compares a loop's size with: every loop takes its one-thread copy
+        if "numba" in available():
+            import numba  # noqa: PLC0415
+
+            numba.set_num_threads(1)  # and the loops that are always parallel run on one
     if args.xpbd_sizes:
         warm_up()
         xpbd_sizes()
         return
     print(f"{args.n}^2 sheet ({2 * (args.n - 1) ** 2} triangles), {args.seconds:g} s, h = {1e3 * H:g} ms, "
-          f"load average {os.getloadavg()[0]:.2f}; each step's time the best of {args.repeat} runs")
+          f"load average {os.getloadavg()[0]:.2f}; each step's time the best of {args.repeat} runs"
+          + ("; every compiled loop on one thread" if args.one_thread else ""))
     backends = ["numpy", "numba"] if args.compare else [args.backend]
     if "numpy" != backends[-1]:
         warm_up()

@@ -104,12 +104,13 @@ class Prefactored(SpringSolver):
     sparse product for the residual and the small least-squares problem of
     Anderson's mixing. Compiled (`backend`), the local step also gives the
     residual (``g = M (x - y) / h^2 - F_springs(x)``, no product with the
-    matrix) and the triangular solves run over SuperLU's factors, kept as
-    plain arrays, all three coordinates in one pass.
+    matrix) and the triangular solves run over the Cholesky factor of
+    SuperLU's symmetric factorization, kept as plain arrays, all three
+    coordinates in one pass.
 
     On the stiff 64 x 64 cloth of ``bench/bench_implicit.py`` at
     ``h = 1/60`` s the warm start cuts Anderson's iterations from about 17 to
-    6 per step; the compiled global step solves with the Cholesky factor
+    5.3 per step; the compiled global step solves with the Cholesky factor
     ``R`` of the symmetric factorization, one triangle read twice
     (:func:`particles.implicit.compiled_factorization.cholesky_factor`). A
     banded Cholesky after reverse Cuthill-McKee is no faster here: the band

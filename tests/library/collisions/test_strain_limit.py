@@ -119,3 +119,23 @@ def test_a_strain_limit_must_fit_the_mesh():
         ClothCollisions(TriangleMesh.grid(6, 6), 0.02, strain_limit=0.1)
     with pytest.raises(ValueError, match="strain_rounds must be an integer >= 1"):
         ClothCollisions(TriangleMesh.grid(6, 6), 0.02, strain_rounds=0)
+
+
+def test_the_numpy_limit_needs_no_numba():
+    """With the NumPy backend a strain-limited drop and the prefactored solver run without importing numba."""
+    import subprocess
+    import sys
+
+    code = ("import sys, particles.backends as b\n"
+            "from particles.collisions import ClothCollisions, Sphere\n"
+            "from particles.implicit import Prefactored\n"
+            "from particles.massspring import cloth\n"
+            "with b.using('numpy'):\n"
+            "    c = cloth(6, 6, plane='horizontal', origin=(-0.2, -0.2, 0.3), pins=None, scaling='physical',"
+            " width=0.4, height=0.4)\n"
+            "    cc = ClothCollisions.from_system(c, thickness=0.02, bodies=[Sphere([0, 0, 0], 0.28)],"
+            " max_strain=0.1)\n"
+            "    c.run(0.3, 0.02, method=cc.stepper(Prefactored(c, 0.02)))\n"
+            "print('numba' in sys.modules, max(r.max_strain for r in cc.history) <= 0.1 + 1e-12)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["False", "True"]
