@@ -31,6 +31,7 @@ References
 import numpy as np
 
 from ..backends import compiled
+from .candidate_cache import CLOTH_COLLISION_WEIGHT
 from ..constraints.provot import ROUNDING, spring_lengths
 from ..constraints.provot_constraint import ProvotConstraint
 
@@ -93,12 +94,18 @@ class StrainLimitStage:
         return strain <= self.strain_limit.max_strain + self.strain_limit.tol + ROUNDING
 
     def _project_strain(self, x0, vbar, h):
-        """Provot's projection of ``x0 + h vbar``, ``vbar`` corrected in place; returns (largest strain, sweeps)."""
+        """Provot's projection of ``x0 + h vbar``, ``vbar`` corrected in place; returns (largest strain, sweeps).
+
+        Compiled (:class:`particles.constraints.kernels.CompiledProjection`) where the constraint's backend
+        resolves to numba for the mesh's vertices weighted as the other stages weigh them
+        (:data:`particles.collisions.candidate_cache.CLOTH_COLLISION_WEIGHT`): a step's projection makes
+        dozens of sweeps.
+        """
         c = self.strain_limit
         X = np.empty((self.n, 2, 3))
         X[:, 0] = x0 + h * vbar
         X[:, 1] = vbar
-        if compiled(c.backend, self.n):
+        if compiled(c.backend, CLOTH_COLLISION_WEIGHT * self.n):  # "auto" as for the other stages
             if c._compiled_projection is None:
                 from ..constraints.kernels import CompiledProjection  # noqa: PLC0415  (imports numba)
                 c._compiled_projection = CompiledProjection(c)
@@ -113,8 +120,9 @@ class StrainLimitStage:
     def _limit_strain(self, x0, vbar, t, h):
         """Alternate Provot's projection and the body stage until both hold; returns the sweeps made.
 
-        At most ``strain_rounds`` alternations; the last word is the bodies' (a vertex never ends in a
-        body), and the caller checks the strain again after its continuous test.
+        At most ``strain_rounds`` alternations, the bodies' vertices in each, their edge samples once
+        at the end; the last word is the bodies' (a vertex never ends in a body), and the caller checks
+        the strain again after its continuous test.
         """
         sweeps = 0
         for _ in range(self.strain_rounds):  # a loop over alternations of the two projections
@@ -124,5 +132,7 @@ class StrainLimitStage:
             sweeps += self._project_strain(x0, vbar, h)[1]
             if not self.bodies:
                 break
+            self._bodies(x0, vbar, t, h, edges=False)  # the vertices; the edge samples once, at the end
+        if sweeps and self.bodies:
             self._bodies(x0, vbar, t, h)
         return sweeps
