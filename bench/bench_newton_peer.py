@@ -5,8 +5,8 @@ with their stiffnesses and rest lengths), its triangles (for contact only: no me
 stiffness of their own), the floor at z = 0 with friction 0.3, the step h = 10 ms in 10 substeps, and
 self-contact at our thickness (half the grid spacing), ``--newton-iterations`` VBD iterations per substep
 (default 4: with one, the 64^2 sheet stretched 26% in its first step and 134% by its eighth). Our air
-damping (0.2 /s) has no counterpart there. Crossings are counted by our exact test on the positions after every step, strains by our
-measure. ``pip install newton`` (the ``[bench]`` extra) installs Newton and Warp; without them
+damping (0.2 /s) has no counterpart there. Crossings are counted by our exact test on the positions
+after every step, strains by our measure. ``pip install newton`` (the ``[bench]`` extra) installs Newton and Warp; without them
 :func:`newton_rows` stops with what to install.
 
 References

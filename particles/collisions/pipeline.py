@@ -419,7 +419,10 @@ class ClothCollisions(BodyStage, ProximityStage, StrainLimitStage, ImpactZoneSta
             self._scatter(vbar, V[g], W[g], I[:, None] * N[g])
 
     def _continuous(self, x0, vbar, t, h):
-        """Stages 3 and 4 on ``vbar``, in place: (found, passes, zones, zone vertices, zone passes, anchored, converged)."""
+        """Stages 3 and 4 on ``vbar``, in place.
+
+        Returns (found, passes, zones, zone vertices, zone passes, anchored, converged).
+        """
         found = passes = 0
         zones = zone_vertices = zone_passes = anchored = 0
         converged = True
