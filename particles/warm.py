@@ -110,9 +110,9 @@ def _pairs():
 
 
 def _cloth_collisions():
-    """The cloth collision pipeline (broad phase, proximity, the continuous test, impact zones): a small sheet
-    dropped on a ball on the floor (:func:`particles.explore.cloth_drop`), just above it, and a sheet folded
-    onto itself (:func:`_folded_sheet`)."""
+    """The cloth collision pipeline (broad phase, proximity, the continuous test, impact zones, the strain limit):
+    a small sheet dropped on a ball on the floor (:func:`particles.explore.cloth_drop`), just above it, a sheet
+    folded onto itself (:func:`_folded_sheet`) and a stretched one (:func:`_strain_limited`)."""
     from .explore import cloth_drop
 
     cloth_drop(200.0, n=8, T=0.1, h=1 / 40, drop=0.005, snapshots=2)
@@ -139,6 +139,21 @@ def _folded_sheet(n=8):
         guard = ClothCollisions(TriangleMesh.grid(n, n), thickness, friction=0.3, proximity=proximity,
                                 bodies=[Plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0])])
         guard.resolve(x0, x0 - dx, -dx / h, 0.0, h)
+    _strain_limited(n)
+
+
+def _strain_limited(n=8):
+    """The strain limit inside the pipeline (Provot's Gauss-Seidel passes on a step's end): a sheet stretched
+    20% along x falling onto the floor."""
+    from .collisions import ClothCollisions, Plane
+    from .massspring import cloth
+
+    c = cloth(n, n, plane="horizontal", origin=(-0.5, -0.5, 0.02), pins=None, scaling="physical")
+    guard = ClothCollisions.from_system(c, thickness=0.25 / (n - 1), friction=0.3, max_strain=0.1,
+                                        bodies=[Plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0])])
+    x0 = c.X[:, 0].copy()
+    x1 = x0 * [1.2, 1.0, 1.0] - [0.0, 0.0, 0.03]
+    guard.resolve(x0, x1, (x1 - x0) / 0.01, 0.0, 0.01)
 
 
 def _implicit():

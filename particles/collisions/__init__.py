@@ -27,6 +27,8 @@ the continuous test and the broad phase (``from particles.collisions import Coll
 * :mod:`particles.collisions.bodies`: the cloth against moving bodies (stage 1 of the pipeline);
 * :mod:`particles.collisions.proximity_impulses`: impulses between pieces of the cloth closer than its
   thickness (stage 2 of the pipeline);
+* :mod:`particles.collisions.strain_limit`: stretch springs held within Provot's limit inside the treatment,
+  alternating with the bodies and closed by the continuous test (stage 2b of the pipeline);
 * :mod:`particles.collisions.zones`: impact zones, moved rigidly (stage 4 of the pipeline);
 * :mod:`particles.collisions.pipeline`: :class:`ClothCollisions`, the Bridson-Fedkiw-Anderson stages applied
   after each step;

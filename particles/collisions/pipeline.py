@@ -41,6 +41,10 @@ move on straight lines ``x0 + t h vbar`` within the step):
    shape (neighbours on the same sheet) never repel, and an edge-edge pair
    whose closest point is an edge's end is left to the vertex-face pairs of
    that vertex (the same contact counted once less).
+2b. **Strain limit** (optional, :mod:`particles.collisions.strain_limit`): the stretch springs longer
+   than ``(1 + s) L0`` at ``x0 + h vbar`` are shortened by Provot's projection, alternating with the
+   body stage; after stages 3 and 4, if a spring is too long again, the limit and both stages run again
+   (at most ``strain_rounds`` times), so the step ends with the continuous test.
 3. **Continuous detection** (:mod:`particles.collisions.ccd`) over ``x0 -> x0 + h vbar``:
    each colliding pair gets an inelastic impulse that stops its approach
    along the normal at the time of impact (and pushes it to
@@ -124,6 +128,7 @@ from .ccd import Impacts, detect_pairs
 from .mesh import TriangleMesh
 from .proximity import dot, edge_edge_kernel, vertex_face_kernel
 from .proximity_impulses import ProximityStage
+from .strain_limit import StrainLimitStage, strain_limit_from_system
 from .surfaces import Surface
 from .zones import ImpactZoneStage
 
@@ -156,6 +161,12 @@ class ClothCollisionResult:
         Vertices held to a body in stage 4.
     converged : bool
         Whether the last detection found no collision (else every free vertex was stopped).
+    strain_sweeps : int
+        Gauss-Seidel sweeps of the strain limit (all its rounds).
+    strain_rounds : int
+        Continuous tests run after a strain limit (1 when the first held).
+    max_strain : float
+        Largest strain of the limited springs at the end of the step (0 without a limit).
     """
 
     body_vertices: int = 0
@@ -168,9 +179,12 @@ class ClothCollisionResult:
     zone_passes: int = 0
     anchored: int = 0
     converged: bool = True
+    strain_sweeps: int = 0
+    strain_rounds: int = 0
+    max_strain: float = 0.0
 
 
-class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
+class ClothCollisions(BodyStage, ProximityStage, StrainLimitStage, ImpactZoneStage):
     """Collisions of a cloth mesh with itself and with bodies, applied after each step.
 
     Parameters
@@ -236,6 +250,14 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
         what is still active after it is a conflict (layers stacked closer
         than the thickness), which plain averaging moves by one layer per
         iteration. 1 is plain averaging throughout.
+    strain_limit : ProvotConstraint, optional
+        Stretch springs held within ``(1 + s) L0`` inside the treatment (stage 2b,
+        :mod:`particles.collisions.strain_limit`), e.g.
+        :func:`particles.collisions.strain_limit.strain_limit_from_system`;
+        :meth:`from_system` makes it from ``max_strain``. Default: none.
+    strain_rounds : int
+        Largest number of alternations of the strain limit with the body stage, and of strain limits
+        followed by a new continuous test (>= 1, default 8).
     backend : {None, "auto", "numpy", "numba"}
         Who runs the broad phase, the proximity tests and Jacobi impulses, and the continuous test
         (:mod:`particles.backends`; :mod:`particles.collisions.compiled_stages`: the same contacts and verdicts);
@@ -267,7 +289,8 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
 
     def __init__(self, mesh, thickness, m=1.0, *, pinned=(), friction=0.0, bodies=(), ccd=True, zones=True,
                  proximity=True, iterations=50, ccd_iterations=10, zone_iterations=100, x_rest=None, rest_distance=None,
-                 repulsion=0.1, separation=None, eta=None, method="jacobi", tol=0.01, relaxation=2.0, backend=None):
+                 repulsion=0.1, separation=None, eta=None, method="jacobi", tol=0.01, relaxation=2.0,
+                 strain_limit=None, strain_rounds=8, backend=None):
         if not isinstance(mesh, TriangleMesh):
             raise ValueError(f"mesh must be a particles.collisions.mesh.TriangleMesh, got {type(mesh).__name__}")
         self.mesh = mesh
@@ -309,6 +332,12 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
         self.relaxation = positive_number(relaxation, "relaxation")
         if self.relaxation < 1:
             raise ValueError(f"relaxation must be at least 1 (1: plain averaging), got {relaxation!r}")
+        if strain_limit is not None and (not callable(getattr(strain_limit, "project", None))
+                                         or len(getattr(strain_limit, "free", ())) != n):
+            raise ValueError(f"strain_limit must be a ProvotConstraint over the mesh's {n} vertices "
+                             f"(see strain_limit_from_system), got {type(strain_limit).__name__}")
+        self.strain_limit = strain_limit
+        self.strain_rounds = count(strain_rounds, "strain_rounds", 1)
         self.last = ClothCollisionResult()
         self.history = []
         self.backend = check_backend(backend)
@@ -331,6 +360,9 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
             Default: :meth:`TriangleMesh.grid` of the system's ``grid_shape``.
         thickness : float
             In metres.
+        max_strain : float, optional
+            A keyword: limit the structural springs' strain to this (Provot's 0.1 for cloth;
+            :func:`~particles.collisions.strain_limit.strain_limit_from_system`). Default: no limit.
         **options
             As :class:`ClothCollisions` (``x_rest`` defaults to the current positions).
         """
@@ -342,6 +374,10 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
         if thickness is None:
             raise ValueError("thickness must be given, in metres (e.g. half the grid spacing)")
         options.setdefault("x_rest", system.X[:, 0])
+        max_strain = options.pop("max_strain", None)
+        if max_strain is not None:
+            options["strain_limit"] = strain_limit_from_system(system, max_strain=max_strain,
+                                                               backend=options.get("backend"))
         return cls(mesh, thickness, m=system.m, pinned=system.pinned, **options)
 
     # ----------------------------------------------------------------- helpers
@@ -382,6 +418,34 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
             I = np.maximum(target[g] - vN, 0.0) / S[g]
             self._scatter(vbar, V[g], W[g], I[:, None] * N[g])
 
+    def _continuous(self, x0, vbar, t, h):
+        """Stages 3 and 4 on ``vbar``, in place.
+
+        Returns (found, passes, zones, zone vertices, zone passes, anchored, converged).
+        """
+        found = passes = 0
+        zones = zone_vertices = zone_passes = anchored = 0
+        converged = True
+        if self.ccd:
+            impacts, moved = self._detect(x0, vbar, h), None
+            for passes in range(1, self.ccd_iterations + 1):  # a loop over detection passes
+                if passes > 1:
+                    impacts = self._detect(x0, vbar, h, moved)
+                if not len(impacts):
+                    break
+                found += len(impacts)
+                self._ccd_impulses(impacts, x0, vbar, h)
+                moved = np.zeros(self.n, dtype=bool)
+                moved[impacts.vertices.ravel()] = True
+                impacts = self._detect(x0, vbar, h, moved) if passes == self.ccd_iterations else Impacts.empty()
+            if not self.ccd_iterations:
+                found = len(impacts)
+            if self.zones:
+                zones, zone_vertices, zone_passes, anchored, converged = self._impact_zones(impacts, x0, vbar, t, h)
+            else:
+                converged = not len(impacts)
+        return found, passes, zones, zone_vertices, zone_passes, anchored, converged
+
     # --------------------------------------------------------------- the step
     def resolve(self, x0, x1, v1, t, h):
         """The treatment of one step from `t` to `t + h`: returns corrected copies of `x1` and `v1`.
@@ -419,29 +483,14 @@ class ClothCollisions(BodyStage, ProximityStage, ImpactZoneStage):
             npairs = self._proximity(contacts, x0, vbar, t, h)
             if self.bodies:
                 self._bodies(x0, vbar, t, h)
-        found = passes = 0
-        zones = zone_vertices = zone_passes = anchored = 0
-        converged = True
-        if self.ccd:
-            impacts, moved = self._detect(x0, vbar, h), None
-            for passes in range(1, self.ccd_iterations + 1):  # a loop over detection passes
-                if passes > 1:
-                    impacts = self._detect(x0, vbar, h, moved)
-                if not len(impacts):
-                    break
-                found += len(impacts)
-                self._ccd_impulses(impacts, x0, vbar, h)
-                moved = np.zeros(self.n, dtype=bool)
-                moved[impacts.vertices.ravel()] = True
-                impacts = self._detect(x0, vbar, h, moved) if passes == self.ccd_iterations else Impacts.empty()
-            if not self.ccd_iterations:
-                found = len(impacts)
-            if self.zones:
-                zones, zone_vertices, zone_passes, anchored, converged = self._impact_zones(impacts, x0, vbar, t, h)
-            else:
-                converged = not len(impacts)
-        self.last = ClothCollisionResult(nv, ne, npairs, found, passes, zones, zone_vertices, zone_passes,
-                                         anchored, converged)
+        sweeps = rounds = 0
+        for rounds in range(1, self.strain_rounds + 1):  # a loop over strain limits, each closed by the ccd
+            if self.strain_limit is not None:
+                sweeps += self._limit_strain(x0, vbar, t, h)
+            counts = self._continuous(x0, vbar, t, h)
+            if self.strain_limit is None or not counts[-1] or self._holds(self._strain(x0, vbar, h)):
+                break
+        self.last = ClothCollisionResult(nv, ne, npairs, *counts, sweeps, rounds, self._strain(x0, vbar, h))
         return x0 + h * vbar, v1 + (vbar - vbar0)
 
     def stepper(self, step):

@@ -240,7 +240,8 @@ def plot_cloth_drop(data):
     ax.set(xlim=(0, data["T"]), ylim=(0.7, 1e4), xlabel="time t (s)", ylabel="per step",
            title=f"stretch modulus {data['stiffness']:g} N/m, h = {1000 * data['h']:.1f} ms: "
                  f"at most {int(np.max(data['crossings']))} crossing pairs of triangles in "
-                 f"{len(data['t'])} steps; lowest point at the end {100 * data['lowest']:.1f} cm")
+                 f"{len(data['t'])} steps, stretch at most {100 * np.max(data['strain']):.1f}%; "
+                 f"lowest point at the end {100 * data['lowest']:.1f} cm")
     ax.title.set_fontsize(10)
     ax.legend(fontsize=8, loc="upper left")
     fig.subplots_adjust(left=0.07, right=0.96, bottom=0.09, top=0.95, hspace=0.25)  # the same for every value

@@ -27,7 +27,7 @@ runs them in the library's loop (see :mod:`particles.integrators.solvers`):
   (global step: a linear system whose matrix ``M + h^2 L`` never changes)
   minimizes the implicit-Euler objective. The matrix is factorized once;
   each iteration costs a few back-substitutions, and a step iterates (with
-  Anderson acceleration) until the objective's gradient is small. With
+  Anderson acceleration, from the last step's answer) until the objective's gradient is small. With
   ``backend="numba"`` (or ``"auto"`` on large systems) the local step, the
   back-substitutions and the residual run compiled
   (:mod:`particles.implicit.compiled_factorization`, over :mod:`particles.implicit.kernels`).
@@ -40,13 +40,15 @@ Both are first order and dissipate energy (numerical damping grows with
 * :mod:`particles.implicit.baraffwitkin`: :class:`BaraffWitkin`, backward Euler with Newton iterations;
 * :mod:`particles.implicit.prefactored`: :class:`Prefactored`, the local/global solver with a matrix
   factorized once;
+* :mod:`particles.implicit.acceleration`: the mixing of :class:`Prefactored`'s iterates (Anderson,
+  Chebyshev);
 * :mod:`particles.implicit.sparse`: their base class and sparse pieces (the free degrees of freedom,
   factorizations);
 * :mod:`particles.implicit.statics`: :func:`relax`, the static equilibrium (a hanging cloth at rest);
 * :mod:`particles.implicit.compiled_factorization`: :class:`Prefactored`'s iteration compiled, over one
   factorization (imports numba);
 * :mod:`particles.implicit.kernels`: its loops: the local step (inlining the springs' formulas), the
-  triangular solves, the residual.
+  triangular solves over the Cholesky factor, the residual.
 
 Implicit Euler for any ODE, :func:`particles.integrators.implicit_euler`, is a stepper of
 :mod:`particles.integrators`.

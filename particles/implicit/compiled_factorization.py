@@ -3,8 +3,8 @@
 :class:`particles.implicit.Prefactored` with the numba backend calls these in
 place of its NumPy methods; the Anderson-accelerated iteration around them is
 the same code. What does not change between iterations (the spring arrays,
-SuperLU's factors as plain arrays, the matrix ``M + h^2 L`` in CSR) is built
-once per factorization, in :class:`FactoredKernels`. Importing this module
+the Cholesky factor from SuperLU's symmetric factorization as plain arrays
+(:func:`cholesky_factor`), the matrix ``M + h^2 L`` in CSR) is built once per factorization, in :class:`FactoredKernels`. Importing this module
 imports numba; :class:`~particles.implicit.Prefactored` imports it when its
 backend resolves to numba (:func:`particles.backends.compiled`).
 
@@ -19,16 +19,46 @@ import scipy.sparse
 
 from .kernels import global_step, gradient_norm, local_step
 
-__all__ = ["FactoredKernels"]
+__all__ = ["FactoredKernels", "cholesky_factor"]
 
 
-def _strict(A, lower):
-    """The strictly lower (or upper) part of `A` in CSR (int64 indices: faster here than int32), and its diagonal."""
-    A = scipy.sparse.csr_matrix(A)
-    part = scipy.sparse.csr_matrix(scipy.sparse.tril(A, -1) if lower else scipy.sparse.triu(A, 1))
-    part.sort_indices()
-    return (part.indptr.astype(np.int64), part.indices.astype(np.int64), np.ascontiguousarray(part.data),
-            np.ascontiguousarray(A.diagonal()))
+def cholesky_factor(lu):
+    """The Cholesky factor ``R`` (upper) of an SPD ``Q`` from SuperLU's symmetric factorization, in CSR parts.
+
+    With symmetric mode and diagonal pivots, ``P Q P^T = L U`` with ``U = D L^T`` (``D`` U's diagonal), so
+    ``P Q P^T = R^T R`` with ``R = D^(-1/2) U``: one triangle instead of two.
+
+    Parameters
+    ----------
+    lu : scipy.sparse.linalg.SuperLU
+        From :func:`particles.implicit.sparse.factorize` (``perm_r == perm_c``).
+
+    Returns
+    -------
+    perm : ndarray of int64, shape (f,)
+        The permutation ``P`` (SuperLU's ``perm_c``).
+    Rp, Rj : ndarray of int32
+        R's strictly upper part: row pointers and column indices.
+    Rx : ndarray, shape (nnz,)
+        Its values.
+    Rd : ndarray, shape (f,)
+        R's diagonal, ``sqrt(D)``.
+
+    Raises
+    ------
+    ValueError
+        If the factorization pivoted off the diagonal or ``D`` is not positive (not an SPD matrix's).
+    """
+    if not np.array_equal(lu.perm_r, lu.perm_c):
+        raise ValueError("lu must be a symmetric factorization (perm_r == perm_c), as factorize() makes")
+    U = scipy.sparse.csr_matrix(lu.U)
+    D = U.diagonal()
+    if not np.all(D > 0):
+        raise ValueError("lu must factorize a symmetric positive definite matrix (U's diagonal > 0)")
+    R = scipy.sparse.csr_matrix(scipy.sparse.diags(1.0 / np.sqrt(D)) @ scipy.sparse.triu(U, 1))
+    R.sort_indices()
+    return (lu.perm_c.astype(np.int64), R.indptr.astype(np.int32), R.indices.astype(np.int32),
+            np.ascontiguousarray(R.data), np.sqrt(D))
 
 
 class FactoredKernels:
@@ -57,17 +87,14 @@ class FactoredKernels:
     The methods return what :class:`particles.implicit.Prefactored`'s
     ``_local``, ``_global`` and ``_gradient_norm`` return, with NumPy's bits
     for ``J d`` and to rounding (about 1e-15 relative) for the rest: the
-    triangular solves run by rows over SuperLU's factors, and the local step
+    triangular solves run over the Cholesky factor ``R`` (:func:`cholesky_factor`), and the local step
     also computes the norm of the gradient of Phi at its positions, as
     ``M (x - y) / h^2 - F_springs(x)`` (equal to ``(Q x - b) / h^2 - J d``),
     which :meth:`gradient_norm` returns for the ``J d`` it made.
     """
 
     def __init__(self, lu, Q, i, j, k, L0, m, free, d):
-        self.Lp, self.Lj, self.Lx, _ = _strict(lu.L, lower=True)
-        self.Up, self.Uj, self.Ux, self.Ud = _strict(lu.U, lower=False)
-        self.perm_r = lu.perm_r.astype(np.int64)
-        self.perm_c = lu.perm_c.astype(np.int64)
+        self.perm, self.Rp, self.Rj, self.Rx, self.Rd = cholesky_factor(lu)
         Q = scipy.sparse.csr_matrix(Q)
         self.Qp, self.Qj, self.Qx = Q.indptr.astype(np.int64), Q.indices.astype(np.int64), Q.data.astype(float)
         self.i, self.j = i.astype(np.int64), j.astype(np.int64)
@@ -96,8 +123,8 @@ class FactoredKernels:
     def solve(self, b, Jd, h2):
         """The free positions (d, f) solving ``Q x = b + h2 J d``."""
         out = np.empty_like(b)
-        global_step(np.ascontiguousarray(b), np.ascontiguousarray(Jd), h2, self.perm_r, self.perm_c,
-                    self.Lp, self.Lj, self.Lx, self.Up, self.Uj, self.Ux, self.Ud, self._y, out)
+        global_step(np.ascontiguousarray(b), np.ascontiguousarray(Jd), h2, self.perm, self.Rp, self.Rj, self.Rx,
+                    self.Rd, self._y, out)
         return out
 
     def gradient_norm(self, u, b, Jd, h2):

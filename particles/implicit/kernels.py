@@ -5,8 +5,8 @@ Imported only by :mod:`particles.implicit.compiled_factorization`. The arithmeti
 that costs nothing: the local step scatters each spring's projection into two
 sums per particle (the spring's first ends, then its second ends, each in
 increasing spring order from zero, as one ``np.bincount`` per role sums them)
-and so gives NumPy's bits; the triangular solves run over SuperLU's own
-factors ``Pr A Pc = L U`` (by rows, where SuperLU works by supernodes), and
+and so gives NumPy's bits; the triangular solves run over the Cholesky
+factor ``R`` of SuperLU's symmetric factorization (``P Q P^T = R^T R``, one triangle read twice), and
 the residual's norm is a plain sum, so these two agree with NumPy to
 rounding (about 1e-15 relative). Arrays are coordinate-major, ``(d, n)``,
 as in the NumPy code; the solves work on particle rows ``(n, d)``. One
@@ -74,60 +74,40 @@ def local_step(xt, i, j, k, L0, free, m, y, h2, xr, Si, Sj, Fs, Jd, out):
 
 
 @jit()
-def global_step(b, Jd, h2, perm_r, perm_c, Lp, Lj, Lx, Up, Uj, Ux, Ud, y, out):
-    """out (d, f) solving ``Q out = b + h2 Jd`` with SuperLU's factors ``Pr Q Pc = L U`` (rows in CSR): ``Prefactored._global``.
+def global_step(b, Jd, h2, perm, Rp, Rj, Rx, Rd, y, out):
+    """out (d, f) solving ``Q out = b + h2 Jd`` with the Cholesky factor ``P Q P^T = R^T R``: ``Prefactored._global``.
 
-    ``Lp, Lj, Lx``: L's strictly lower part (L has a unit diagonal); ``Up, Uj, Ux``: U's strictly upper
-    part, ``Ud`` its diagonal; ``perm_r``, ``perm_c``: SuperLU's permutations; `y` (f, 3) scratch (in
-    2D its third column stays zero). Each row's sum runs over two accumulators (even and odd entries),
-    whose additions overlap.
+    ``Rp, Rj, Rx``: R's strictly upper part in CSR (int32 indices), ``Rd`` its diagonal; `perm` the
+    symmetric permutation (SuperLU's); `y` (f, 3) scratch (in 2D its third column stays zero). One
+    factor, read twice: forward ``R^T w = P r`` by R's rows scattered (columns of R^T), backward
+    ``R z = w`` by R's rows gathered.
     """
     dim, f = b.shape
     y[:, 2] = 0.0
-    for r in range(f):  # y = Pr (b + h2 Jd)
+    for r in range(f):  # y = P (b + h2 Jd)
         for c in range(dim):
-            y[perm_r[r], c] = b[c, r] + h2 * Jd[c, r]
-    for r in range(f):  # L y' = y, forward by rows
+            y[perm[r], c] = b[c, r] + h2 * Jd[c, r]
+    for r in range(f):  # R^T w = y, forward: w_r final once the rows above scattered into it
+        inv = 1.0 / Rd[r]
+        w0, w1, w2 = y[r, 0] * inv, y[r, 1] * inv, y[r, 2] * inv
+        y[r, 0], y[r, 1], y[r, 2] = w0, w1, w2
+        for e in range(Rp[r], Rp[r + 1]):
+            q, v = Rj[e], Rx[e]
+            y[q, 0] -= v * w0
+            y[q, 1] -= v * w1
+            y[q, 2] -= v * w2
+    for r in range(f - 1, -1, -1):  # R z = w, backward by rows
         a0, a1, a2 = y[r, 0], y[r, 1], y[r, 2]
-        o0, o1, o2 = 0.0, 0.0, 0.0
-        e, end = Lp[r], Lp[r + 1]
-        while e + 1 < end:
-            w, q, v, p = Lx[e], Lj[e], Lx[e + 1], Lj[e + 1]
-            a0 -= w * y[q, 0]
-            a1 -= w * y[q, 1]
-            a2 -= w * y[q, 2]
-            o0 += v * y[p, 0]
-            o1 += v * y[p, 1]
-            o2 += v * y[p, 2]
-            e += 2
-        if e < end:
-            w, q = Lx[e], Lj[e]
-            a0 -= w * y[q, 0]
-            a1 -= w * y[q, 1]
-            a2 -= w * y[q, 2]
-        y[r, 0], y[r, 1], y[r, 2] = a0 - o0, a1 - o1, a2 - o2
-    for r in range(f - 1, -1, -1):  # U y'' = y', backward by rows
-        a0, a1, a2 = y[r, 0], y[r, 1], y[r, 2]
-        o0, o1, o2 = 0.0, 0.0, 0.0
-        e, end = Up[r], Up[r + 1]
-        while e + 1 < end:
-            w, q, v, p = Ux[e], Uj[e], Ux[e + 1], Uj[e + 1]
-            a0 -= w * y[q, 0]
-            a1 -= w * y[q, 1]
-            a2 -= w * y[q, 2]
-            o0 += v * y[p, 0]
-            o1 += v * y[p, 1]
-            o2 += v * y[p, 2]
-            e += 2
-        if e < end:
-            w, q = Ux[e], Uj[e]
-            a0 -= w * y[q, 0]
-            a1 -= w * y[q, 1]
-            a2 -= w * y[q, 2]
-        y[r, 0], y[r, 1], y[r, 2] = (a0 - o0) / Ud[r], (a1 - o1) / Ud[r], (a2 - o2) / Ud[r]
-    for r in range(f):  # out = Pc y''
+        for e in range(Rp[r], Rp[r + 1]):
+            q, v = Rj[e], Rx[e]
+            a0 -= v * y[q, 0]
+            a1 -= v * y[q, 1]
+            a2 -= v * y[q, 2]
+        inv = 1.0 / Rd[r]
+        y[r, 0], y[r, 1], y[r, 2] = a0 * inv, a1 * inv, a2 * inv
+    for r in range(f):  # out = P^T z
         for c in range(dim):
-            out[c, r] = y[perm_c[r], c]
+            out[c, r] = y[perm[r], c]
 
 
 @jit()

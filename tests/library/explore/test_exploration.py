@@ -218,14 +218,15 @@ def test_bounce_height_ratio_is_eps_squared():
 
 
 def test_cloth_drop_wraps_the_ball_and_reaches_the_floor_without_crossing():
-    """A 10^2 sheet dropped on the ball: no crossing pair after any step, the bodies stage holds it off
-    the ball and the floor, and the figure says so; a softer sheet sags lower."""
+    """A 10^2 sheet dropped on the ball: no crossing pair after any step, the stretch within 10%, the bodies
+    stage holds it off the ball and the floor, and the figure says so; a softer sheet sags lower."""
     exp = Exploration(lambda Y: explore.cloth_drop(Y, n=10, T=0.6), figures.plot_cloth_drop,
                       ("Y", [50.0, 1000.0]))
     for Y in exp.values:
         exp.value = Y
         data = exp.data
         assert data["crossings"].max() == 0 and len(data["crossings"]) == 24
+        assert data["strain"].max() <= 0.1 + 1e-12 and len(data["strain"]) == 24
         assert data["stages"]["vertices moved out of a body"].max() > 0
         assert 0.25 / 9 / 2 <= data["lowest"] < data["radius"]         # down the ball, off the floor
         assert data["x"].shape == (4, 100, 3) and np.all(data["x"][-1, :, 2] >= data["lowest"])

@@ -1,16 +1,20 @@
 """The prefactorized solver's compiled pieces (particles.implicit.compiled_factorization) against its NumPy methods.
 
 The local step gives NumPy's bits for ``J d``; the triangular solves over
-SuperLU's factors, the springs' energy and the gradient's norm agree with
+the Cholesky factor taken from SuperLU's symmetric factorization, the springs' energy and the gradient's norm agree with
 NumPy to 1e-12 relative (rounding: sums in another order). Cloths in 3D and
 strings in 2D, with pins, off rest; the inputs are not modified.
 """
 
 import numpy as np
 import pytest
+import scipy.sparse
+import scipy.sparse.linalg
 
 from particles import backends
 from particles.implicit import Prefactored
+from particles.implicit.compiled_factorization import cholesky_factor
+from particles.implicit.sparse import factorize
 from particles.massspring import cloth, string
 
 from ..backends.helpers import _close
@@ -53,8 +57,8 @@ def test_local_step_gives_numpys_projections_and_energy(make):
 
 
 @pytest.mark.parametrize("make", SYSTEMS)
-def test_solves_over_superlus_factors_agree_with_superlu(make):
-    """The compiled triangular solves of Q x = b + h^2 J d agree with SuperLU's solve to 1e-12; inputs kept."""
+def test_solves_over_the_cholesky_factor_agree_with_superlu(make):
+    """The compiled Cholesky solves of Q x = b + h^2 J d agree with SuperLU's solve to 1e-12; inputs kept."""
     c, solver, fast, xt, y, b = _case(make)
     Jd, _ = solver._local(xt)
     kept = (b.copy(), Jd.copy())
@@ -94,3 +98,27 @@ def test_the_local_steps_norm_is_that_of_its_own_positions():
     moved[:, solver._free] += 0.01
     fast.local(moved)
     assert fast.gradient_norm(u, b, Jd, H * H) == pytest.approx(first, rel=1e-12)
+
+
+@pytest.mark.parametrize("make", SYSTEMS)
+def test_cholesky_factor_reproduces_the_permuted_matrix(make):
+    """R from SuperLU's symmetric factorization: P Q P^T = R^T R to 1e-13, R upper with a positive diagonal."""
+    c, solver, fast, xt, y, b = _case(make)
+    perm, Rp, Rj, Rx, Rd = cholesky_factor(solver._lu)
+    f = len(Rd)
+    R = scipy.sparse.csr_matrix((Rx, Rj, Rp), shape=(f, f)) + scipy.sparse.diags(Rd)
+    Q = solver._Q_ff.toarray()
+    P = np.zeros((f, f))
+    P[perm, np.arange(f)] = 1.0  # the solve's convention: row r of Q goes to row perm[r]
+    assert np.all(Rd > 0) and scipy.sparse.tril(R, -1).nnz == 0
+    np.testing.assert_allclose((R.T @ R).toarray(), P @ Q @ P.T, atol=1e-13 * np.abs(Q).max())
+
+
+def test_cholesky_factor_refuses_an_unsymmetric_factorization():
+    """A factorization with row pivots (not SuperLU's symmetric mode) is refused with a message."""
+    A = scipy.sparse.csc_matrix(np.array([[1e-3, 1.0, 0.0], [1.0, 1.0, 0.5], [0.0, 0.5, 3.0]]))
+    lu = scipy.sparse.linalg.splu(A, permc_spec="NATURAL")
+    with pytest.raises(ValueError, match="lu must be a symmetric factorization"):
+        cholesky_factor(lu)
+    with pytest.raises(ValueError, match="symmetric positive definite"):
+        cholesky_factor(factorize(scipy.sparse.csc_matrix(np.diag([1.0, -2.0, 3.0]))))

@@ -199,8 +199,61 @@ def test_prefactored_refactorizes_for_a_new_step():
     ({"max_iterations": 0}, "max_iterations must be an integer >= 1, got 0"),
     ({"anderson": -1}, "anderson must be an integer >= 0, got -1"),
     ({"tol": -1.0}, "tol must be"),
+    ({"chebyshev": 1.0}, r"chebyshev must be a spectral radius estimate in \[0, 1\)"),
+    ({"chebyshev": float("nan")}, "chebyshev must be a spectral radius"),
+    ({"chebyshev": 0.9}, "choose one acceleration"),
 ])
 def test_prefactored_rejects_bad_options(options, message):
     """The residual rule's options are checked and named in the error."""
     with pytest.raises(ValueError, match=message):
         Prefactored(small_cloth(), 0.01, **options)
+
+
+@pytest.mark.parametrize("options", [{}, {"warm_start": False}])
+def test_the_warm_start_reaches_the_same_fall(options):
+    """Anderson's iterations from the last step's answer or from y: the same backward-Euler fall."""
+    h, centre = 1 / 30, readme_cloth(16).points["center"]
+    c = readme_cloth(16)
+    c.run(0.5, h, method=BaraffWitkin(c, linear_solver="direct", newton_iterations=4))
+    reference = -c.X[centre, 0, 2]
+    c = readme_cloth(16)
+    solver = Prefactored(c, h, **options)
+    c.run(0.5, h, method=solver)
+    assert -c.X[centre, 0, 2] == pytest.approx(reference, rel=0.02)
+
+
+def test_warm_start_and_chebyshev_take_fewer_iterations():
+    """Stiff cloth at h = 1/60 s: the warm start saves Anderson 40% of its iterations; warm Chebyshev beats plain 4x."""
+    counts = {}
+    for name, options in (("default", {}), ("cold", {"warm_start": False}),
+                          ("chebyshev", {"anderson": 0, "chebyshev": 0.95}),
+                          ("plain", {"anderson": 0, "warm_start": False})):
+        c = stiff_cloth(16)
+        solver = Prefactored(c, 1 / 60, **options)
+        c.run(0.25, 1 / 60, method=solver)
+        counts[name] = np.mean(solver.counts)
+    assert counts["default"] < 0.6 * counts["cold"]
+    assert counts["chebyshev"] < 0.25 * counts["plain"]
+
+
+def test_chebyshev_follows_backward_euler():
+    """Warm Chebyshev (rho = 0.95) on the hanging stiff cloth: the same states as Anderson to the tolerance."""
+    ends = {}
+    for name, options in (("anderson", {}), ("chebyshev", {"anderson": 0, "chebyshev": 0.95})):
+        c = stiff_cloth(16)
+        c.run(0.25, 1 / 60, method=Prefactored(c, 1 / 60, **options))
+        ends[name] = c.X[:, 0]
+    sag = np.abs(ends["anderson"] - stiff_cloth(16).state()[:, 0]).max()
+    assert np.abs(ends["chebyshev"] - ends["anderson"]).max() <= 0.02 * sag
+
+
+def test_warm_start_is_dropped_with_a_new_step():
+    """A refactorization for another h forgets the last answer; a step after it still converges."""
+    c = stiff_cloth(8)
+    solver = Prefactored(c, 1 / 60)
+    X = solver.step(c.state(), 0.0, 1 / 60)
+    assert solver._offset is not None
+    solver._factor(1 / 30)
+    assert solver._offset is None
+    solver.step(X, 1 / 60, 1 / 30)
+    assert solver._offset is not None and len(solver.counts) == 2
