@@ -18,7 +18,7 @@ and the largest strain of each kind over all steps. ``--peer newton`` runs
 the same sheet (particles, springs, masses, step, substeps, thickness,
 friction, floor) with Newton's VBD solver and its self-contact on Warp's CPU
 device and prints the same columns, crossings counted by our exact test
-(:mod:`bench_newton_peer`; ``pip install newton``, the ``[bench]`` extra). Each run is made ``--repeat`` times (default 2), and each step's time is its best: the
+(:mod:`_newton_peer`, beside it; ``pip install newton``, the ``[bench]`` extra). Each run is made ``--repeat`` times (default 2), and each step's time is its best: the
 runs are the same steps bit for bit (checked), so the best leaves out what the host took from one of them
 (one run alone showed a worst step of 325 ms where the step itself takes 241). ``--backend`` chooses who runs the collision stages
 (:mod:`particles.collisions.compiled_stages`) and the XPBD substeps (:mod:`particles.xpbd.compiled_substep`)
@@ -228,7 +228,7 @@ def main(argv=None):
     out = report(f"ClothCollisions (proximity, strain limit {100 * MAX_STRAIN:g}%, continuous test, impact zones)",
                  {b: best_of(args.repeat, args.n, args.seconds, True, backend=b) for b in backends})
     if args.peer == "newton":
-        from bench_newton_peer import newton_rows  # noqa: PLC0415  (imports newton and warp)
+        from _newton_peer import newton_rows  # noqa: PLC0415  (imports newton and warp)
         report(f"Newton's VBD solver with self-contact on Warp's CPU device (the same sheet, "
                f"{args.newton_iterations} iterations per substep; 1 run)",
                {"newton": newton_rows(upright_sheet(args.n), args.n, args.seconds, H, strains, args.newton_iterations)})
