@@ -96,11 +96,8 @@ def _current(out):
     """(student, exercise) -> current record, from the course record of `out`."""
     from particles.course.term.database import TermRecord
 
-    term = TermRecord(out)
-    try:
+    with TermRecord(out) as term:
         return term.current()
-    finally:
-        term.close()
 
 
 def _fill(rubric):

@@ -149,11 +149,9 @@ def read_records(out):
         term = TermRecord(out)
     except ValueError as error:
         raise ExportError(str(error)) from None
-    try:
+    with term:
         records = {f"{student}/{exercise}": record for (student, exercise), record in term.current().items()}
         return records, term.pending()
-    finally:
-        term.close()
 
 
 @dataclass

@@ -187,6 +187,13 @@ class TermRecord:
         self.unlock()
         self.db.close()
 
+    def __enter__(self):
+        """``with TermRecord(out) as term:`` closes the record (and releases its lock) on leaving."""
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
     @contextmanager
     def transaction(self):
         """One change, all or nothing (``BEGIN IMMEDIATE``: no other writer in between)."""

@@ -70,11 +70,8 @@ def _records(out, tmp):
 
     if not (Path(out) / DATABASE).exists():
         return {}
-    term = TermRecord(out)
-    try:
+    with TermRecord(out) as term:
         current = term.current()
-    finally:
-        term.close()
     found = {}
     for (student, exercise), record in current.items():
         data = record.to_dict()

@@ -45,22 +45,16 @@ def folder_records(out):
 
     if not (Path(out) / DATABASE).exists():
         return {}
-    term = TermRecord(out)
-    try:
+    with TermRecord(out) as term:
         return {key: normal(record) for key, record in term.current().items()}
-    finally:
-        term.close()
 
 
 def run_statuses(out):
     """How each run of an output folder's course record ended, oldest first."""
     from particles.course.term.database import TermRecord
 
-    term = TermRecord(out)
-    try:
+    with TermRecord(out) as term:
         return [run["status"] for run in term.runs()]
-    finally:
-        term.close()
 
 
 def wait_for(condition, seconds, what):

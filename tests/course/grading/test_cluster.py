@@ -105,11 +105,8 @@ def test_a_scheduler_run_records_what_a_local_run_records(subs, local_run, tmp_p
 def _current(out):
     from particles.course.term.database import TermRecord
 
-    term = TermRecord(out)
-    try:
+    with TermRecord(out) as term:
         return term.current()
-    finally:
-        term.close()
 
 
 def test_ctrl_c_cancels_the_cluster_run_and_ends_as_a_local_run_does(subs, tmp_path):

@@ -27,11 +27,8 @@ def _write(folder, name, notebook):
 
 def _current(out):
     """student -> current record (of 00_warmup) in the course record of `out`."""
-    term = TermRecord(out)
-    try:
+    with TermRecord(out) as term:
         return {student: record for (student, _), record in term.current().items()}
-    finally:
-        term.close()
 
 
 def test_records_are_written_as_they_are_made_and_resumed(tmp_path):

@@ -127,3 +127,16 @@ def test_a_resumed_run_keeps_only_a_complete_result_of_the_same_notebook_options
     assert term.kept(unit, "v2", {"seed": 1}) is None and term.kept(unit, "v1", {"seed": 2}) is None
     notebook.write_text('{"changed": 1}')
     assert term.kept(Unit("ann", "00_warmup", notebook), "v1", {"seed": 1}) is None
+
+
+def test_a_record_used_as_a_context_closes_and_releases_its_lock_even_when_the_block_fails(tmp_path):
+    """``with TermRecord(out) as term``: on leaving, also by an exception, the lock is free for the next run
+    and the connection is closed."""
+    with pytest.raises(RuntimeError, match="stop"):
+        with TermRecord(tmp_path) as term:
+            term.lock()
+            raise RuntimeError("stop")
+    with pytest.raises(sqlite3.ProgrammingError):
+        term.db.execute("SELECT 1")
+    with TermRecord(tmp_path) as other:
+        other.lock()  # not refused: the first one let go
