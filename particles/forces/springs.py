@@ -183,12 +183,40 @@ def _assemble(B, i, j, n, dim):
     return scipy.sparse.coo_matrix((vals, (rows, cols)), shape=(n * dim, n * dim)).tocsr()
 
 
+# theta / sin(theta) = acos(c) / sqrt(1 - c^2) = sum_n a_n (1 - c)^n with a_n = (n!)^2 2^n / (2n + 1)!
+# (a_{n+1} = a_n (n + 1) / (2n + 3)); for a joint bent by less than 29 degrees (1 - c < 1/8) the terms after
+# these 17 are below 1e-20
+STRAIGHT_RANGE = 0.125
+STRAIGHT_SERIES = (1.0, 1 / 3, 2 / 15, 2 / 35, 8 / 315, 8 / 693, 16 / 3003, 16 / 6435, 128 / 109395, 128 / 230945,
+                   256 / 969969, 256 / 2028117, 1024 / 16900975, 1024 / 35102025, 2048 / 145422675,
+                   2048 / 300540195, 32768 / 9917826435)
+
+
+def straight_ratio(x):
+    """``theta / sin(theta)`` of a joint with ``1 - cos(theta) = x`` below 1/8, by its series (Horner's rule).
+
+    Near ``theta = 0`` the quotient ``acos(c) / sqrt(1 - c^2)`` divides two small numbers, each with a
+    rounding error relative to it; the series in ``x`` has none of that, and needs no ``acos`` or ``sqrt``.
+    """
+    ratio = STRAIGHT_SERIES[-1]
+    for n in range(len(STRAIGHT_SERIES) - 2, -1, -1):  # a loop over the 16 coefficients
+        ratio = STRAIGHT_SERIES[n] + x * ratio
+    return ratio
+
+
+def bent_ratio(c, theta0):
+    """``(theta - theta0) / sin(theta)`` with ``theta = acos(c)``; 1 below ``sin(theta) = 1e-8``."""
+    s = np.sqrt(np.maximum(1.0 - c * c, 0.0))
+    return select(s > 1e-8, (np.arccos(c) - theta0) / np.maximum(s, 1e-8), 1.0)
+
+
 def joint_factor(c, theta0, kb):
     """``kb (theta - theta0) / sin(theta)`` at a joint of angle ``theta = acos(c)``: the bending force's scale.
 
     The energy ``kb (theta - theta0)^2 / 2`` gives ``F = -kb (theta - theta0) dtheta/dx`` and
-    ``dtheta/dx = -(dc/dx) / sin(theta)``, so the force is this factor times ``dc/dx``. Below
-    ``sin(theta) = 1e-8`` the factor is ``kb`` (for a straight rest shape, ``theta / sin(theta) -> 1``).
+    ``dtheta/dx = -(dc/dx) / sin(theta)``, so the force is this factor times ``dc/dx``. A joint that is
+    straight at rest (``theta0 = 0``) and bent by less than 29 degrees takes ``theta / sin(theta)`` from
+    its series (:func:`straight_ratio`), every other joint from :func:`bent_ratio`.
 
     Parameters
     ----------
@@ -199,8 +227,8 @@ def joint_factor(c, theta0, kb):
     kb : float or ndarray
         Stiffness, in N m / rad.
     """
-    s = np.sqrt(np.maximum(1.0 - c * c, 0.0))
-    return kb * select(s > 1e-8, (np.arccos(c) - theta0) / np.maximum(s, 1e-8), 1.0)
+    x = 1.0 - c
+    return kb * select((x < STRAIGHT_RANGE) & (theta0 == 0.0), straight_ratio(x), bent_ratio(c, theta0))
 
 
 def bending_forces(F, x, i, j, l, kb, theta0):

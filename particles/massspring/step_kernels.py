@@ -39,12 +39,11 @@ import math
 
 from ..backends.compile import inline, jit, prange
 from ..forces.fields import gust_factor
-from ..forces.kernels import spring_pull
+from ..forces.kernels import spring_pull  # also makes joint_factor callable in kernels (its lazy form)
 from ..forces.springs import joint_factor
 
 __all__ = ["symplectic_euler_steps", "clamp_pass", "GUST", "PHASE", "WAVELENGTH", "PER_MASS"]
 
-inline(joint_factor)
 inline(gust_factor)
 
 # columns of a row of the winds' table (see symplectic_euler_steps), after the 2 d of s and u

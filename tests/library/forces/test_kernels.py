@@ -10,6 +10,7 @@ import pytest
 
 from particles import backends
 from particles.forces import Bending, LennardJones, NBodyGravity
+from particles.forces.springs import joint_factor
 from particles.massspring import cloth
 from particles.md import fcc_lattice
 from particles.xpbd import XPBD
@@ -79,6 +80,29 @@ def test_nbody_and_bending_agree_with_numpy(d):
     for make in (lambda b: NBodyGravity(G=2.0, softening=0.05, backend=b),
                  lambda b: Bending(triples, kb=kb, rest_angle=0.2, backend=b)):
         _close(make("numpy")(x, m=m), make("numba")(x, m=m))
+
+
+@needs_numba
+def test_bending_agrees_on_both_forms_of_the_joint_factor():
+    """A chain straight at rest, some joints bent by less than 29 degrees (the series) and some by more (acos),
+    and a chain with a rest angle (acos only): the kernel's branch chooses the form NumPy selects, to 1e-13."""
+    rng = np.random.default_rng(8)
+    s = np.linspace(0.0, 3.0, 400)
+    bend = rng.choice([1e-7, 1e-3, 0.2, 0.8], size=400)  # turning per link, in radians
+    angle = np.cumsum(bend * rng.choice([-1.0, 1.0], size=400))
+    x = np.stack([np.cumsum(np.cos(angle)), np.cumsum(np.sin(angle)), 0.01 * s], axis=1)
+    triples = np.stack([np.arange(398), np.arange(1, 399), np.arange(2, 400)], axis=1)
+    for rest in (0.0, 0.3):
+        numpy_F = Bending(triples, kb=1.0, rest_angle=rest, backend="numpy")(x)
+        np.testing.assert_allclose(Bending(triples, kb=1.0, rest_angle=rest, backend="numba")(x), numpy_F,
+                                   rtol=1e-13, atol=1e-13 * np.abs(numpy_F).max())
+    import numba  # noqa: PLC0415  (the law alone, compiled as the kernels compile it: the same form, to the last bits)
+
+    from particles.forces import kernels  # noqa: F401, PLC0415  (registers the kernels' form of joint_factor)
+    compiled = numba.njit(lambda c, theta0: joint_factor(c, theta0, 1.0))
+    c = np.cos(np.array([1e-7, 1e-5, 1e-3, 0.1, 0.5, 0.6, 2.0]))
+    for rest in (0.0, 0.3):
+        np.testing.assert_allclose([compiled(ci, rest) for ci in c], joint_factor(c, rest, 1.0), rtol=5e-16, atol=0)
 
 
 @needs_numba

@@ -1,9 +1,12 @@
 """The formulas of springs, bending and clamps (particles.forces.springs) and their NumPy passes."""
 
+from fractions import Fraction
+
 import numpy as np
 import pytest
 
-from particles.forces.springs import bending_forces, damped_spring_force, joint_factor, spring_forces
+from particles.forces.springs import (STRAIGHT_RANGE, bending_forces, bent_ratio, damped_spring_force, joint_factor,
+                                      spring_forces, straight_ratio)
 
 
 def test_damped_spring_force_is_the_slides_formula():
@@ -49,6 +52,29 @@ def test_joint_factor_is_the_angle_over_its_sine_with_its_limit_at_straight():
                                rtol=1e-12)
     assert joint_factor(1.0, 0.0, 2.0) == 2.0
     assert joint_factor(np.cos(1e-3), 0.0, 2.0) == pytest.approx(2.0 * 1e-3 / np.sin(1e-3), rel=1e-9)
+
+
+def _ratio_exactly(c):
+    """theta / sin(theta) at cos(theta) = c (a double), from its series in 1 - c summed in rationals to 1e-30."""
+    x, a, total, n = 1 - Fraction(c), Fraction(1), Fraction(0), 0
+    while a * x**n > Fraction(1, 10**30):  # a loop over the series' terms
+        total += a * x**n
+        a, n = a * (n + 1) / (2 * n + 3), n + 1
+    return float(total)
+
+
+def test_a_nearly_straight_joint_takes_its_series_to_the_last_bits():
+    """Straight at rest and bent by less than 29 degrees: theta / sin(theta) to 2 ulp of the exact value, where
+    acos(c) / sqrt(1 - c^2) loses up to 1e-11 (two small numbers divided); at 29 degrees both forms agree."""
+    theta = np.array([1e-7, 1e-6, 1e-5, 1e-3, 0.01, 0.1, 0.3, 0.5])
+    c = np.cos(theta)
+    exact = np.array([_ratio_exactly(float(ci)) for ci in c])
+    np.testing.assert_allclose(joint_factor(c, 0.0, 1.0), exact, rtol=4.5e-16, atol=0)
+    assert np.max(np.abs(bent_ratio(c, 0.0) / exact - 1)) > 1e-12  # what the series spares
+    edge = np.nextafter(1.0 - STRAIGHT_RANGE, 2.0)  # the last cosine of the series' range, and the first after it
+    for ci in (edge, np.nextafter(edge, 0.0)):
+        assert float(joint_factor(ci, 0.0, 1.0)) == pytest.approx(_ratio_exactly(ci), rel=1e-15)
+    assert float(straight_ratio(0.0)) == 1.0
 
 
 def test_a_bent_joint_swings_its_ends_towards_straight_with_no_net_force():
