@@ -80,7 +80,7 @@ def strains(c, x):
     return tuple(out)
 
 
-def run(n, seconds, treat, backend=None):
+def run(n, seconds, treat, backend=None, iterations=None):
     """Step the sheet; per step: time, wall time, crossing pairs, closest pair / thickness (None untreated),
     and the largest structural, shear and flexion strains."""
     c = upright_sheet(n)
@@ -88,6 +88,7 @@ def run(n, seconds, treat, backend=None):
     thickness = 0.5 / (n - 1)
     cc = ClothCollisions.from_system(c, mesh, thickness=thickness, bodies=[FLOOR], friction=0.3,
                                      proximity=treat, ccd=treat, zones=treat, backend=backend,
+                                     **({} if iterations is None else {"iterations": iterations}),
                                      max_strain=MAX_STRAIN if treat else None)
     step = cc.stepper(XPBD.from_system(c, substeps=10, backend=backend))
     rows = []
@@ -192,6 +193,8 @@ def main(argv=None):
                              "26%% in its first step and 134%% by its eighth)")
     parser.add_argument("--backend", default="auto", choices=["auto", "numpy", "numba"],
                         help="who runs the collision stages and the XPBD substeps (default auto)")
+    parser.add_argument("--iterations", type=int, default=None,
+                        help="proximity iterations of the treatment (default: ClothCollisions' own)")
     parser.add_argument("--compare", action="store_true", help="the treated sheet with NumPy and with numba")
     parser.add_argument("--no-baseline", action="store_true", help="skip the floor-only run")
     parser.add_argument("--repeat", type=int, default=2, help="runs of each sheet; per step the best (default 2)")
@@ -226,7 +229,8 @@ def main(argv=None):
         report("floor only (no self-collision treatment)",
                {"floor": best_of(args.repeat, args.n, args.seconds, False)})
     out = report(f"ClothCollisions (proximity, strain limit {100 * MAX_STRAIN:g}%, continuous test, impact zones)",
-                 {b: best_of(args.repeat, args.n, args.seconds, True, backend=b) for b in backends})
+                 {b: best_of(args.repeat, args.n, args.seconds, True, backend=b, iterations=args.iterations)
+                  for b in backends})
     if args.peer == "newton":
         from _newton_peer import newton_rows  # noqa: PLC0415  (imports newton and warp)
         report(f"Newton's VBD solver with self-contact on Warp's CPU device (the same sheet, "

@@ -217,31 +217,43 @@ def query_bound(q, q_lo, q_hi, origin, cell, shape, ptr):
 
 
 @jit(parallel=True)
-def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
-    """Sorted keys ``q len(T) + t`` of the overlapping query-target pairs that share no vertex.
+def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked, ordered):
+    """Keys ``q len(T) + t`` of the overlapping query-target pairs that share no vertex, sorted when `ordered`.
 
     Parameters: the boxes ``(lo, hi)`` of the queries and the targets (shape (k, 3)), their vertices `Q`
     and `T` (index tables), `same` (one set: pairs ``q < t``), and a vertex `mask` used when `masked`.
     Each query writes into its own slice of a buffer sized by :func:`query_bound` (one pass of tests),
-    sorts it, and the slices are joined in query order. With `masked`, a query that holds no masked
-    vertex walks a second table, of the targets that hold one (the continuous test's searches after
-    the first, where a few vertices still move, walk a few boxes instead of all).
+    sorts it when `ordered`, and the slices are joined in query order. Unsorted, the keys come in an order
+    fixed by the boxes alone (the grid's walk; the same on any number of threads): sorting the slices took
+    half of the fold's searches, and a caller that keeps few of the pairs sorts those. With `masked`, a query that holds no masked
+    vertex walks a second table, of the targets that hold one, and only when its box meets the box around
+    those targets (the continuous test's searches after the first, where a few vertices still move, walk a
+    few boxes instead of all).
     """
     origin, cell, shape = grid_shape(q_lo, q_hi, t_lo, t_hi)
     ptr, items = cell_table(t_lo, t_hi, origin, cell, shape, np.ones(len(t_lo), dtype=np.bool_))
     nq = len(q_lo)
     q_in = np.zeros(nq, dtype=np.bool_)
     ptr_in, items_in = ptr, items  # with a mask: the table of the targets that hold a masked vertex
+    reach = np.empty((2, 3))  # with a mask: the box around the masked targets' boxes
     if masked:
         t_in = np.empty(len(t_lo), dtype=np.bool_)
+        reach[0], reach[1] = np.inf, -np.inf
         for t in range(len(t_lo)):
             t_in[t] = holds_masked(T, t, mask)
+            if t_in[t]:
+                for a in range(3):
+                    reach[0, a] = min(reach[0, a], t_lo[t, a])
+                    reach[1, a] = max(reach[1, a], t_hi[t, a])
         for q in range(nq):
             q_in[q] = holds_masked(Q, q, mask)
         ptr_in, items_in = cell_table(t_lo, t_hi, origin, cell, shape, t_in)
     bounds = np.zeros(nq + 1, dtype=np.int64)
-    for q in prange(nq):  # a query outside the mask walks the masked targets' table only
-        bounds[q + 1] = query_bound(q, q_lo, q_hi, origin, cell, shape, ptr if q_in[q] or not masked else ptr_in)
+    for q in prange(nq):  # a query outside the mask walks the masked targets' table only, if it reaches them
+        if q_in[q] or not masked:
+            bounds[q + 1] = query_bound(q, q_lo, q_hi, origin, cell, shape, ptr)
+        elif overlap(q_lo, q_hi, q, reach[:1], reach[1:], 0):
+            bounds[q + 1] = query_bound(q, q_lo, q_hi, origin, cell, shape, ptr_in)
     for q in range(nq):
         bounds[q + 1] += bounds[q]
     found = np.zeros(nq + 1, dtype=np.int64)
@@ -251,9 +263,12 @@ def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
         for q in range(b * QUERY_BLOCK, min(nq, (b + 1) * QUERY_BLOCK)):
             s = bounds[q]
             whole = q_in[q] or not masked
+            if bounds[q + 1] == s:  # nothing to walk (a query that reaches no masked target)
+                continue
             f = query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr if whole else ptr_in,
                       items if whole else items_in, Q, T, same, targets, s)
-            targets[s:s + f].sort()
+            if ordered:
+                targets[s:s + f].sort()
             found[q + 1] = f
     for q in range(nq):
         found[q + 1] += found[q]
@@ -269,17 +284,20 @@ def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
 
 @jit(parallel=True)
 def key_rows(keys, m, Q, T, out):
-    """``out[k] = (Q[q], T[t])`` for each key ``q m + t``: the vertices of each candidate pair, in one row.
+    """``out[k] = (Q[q], T[t])`` for each key ``q m + t``: the vertices of each candidate pair, in one row, and the
+    key itself in a last column when `out` has one.
 
     The rows of :func:`particles.collisions.candidates.pair_rows` (a gather).
     """
-    a = Q.shape[1]
+    a, b = Q.shape[1], T.shape[1]
     for k in prange(len(keys)):
         q, t = keys[k] // m, keys[k] % m
         for j in range(a):
             out[k, j] = Q[q, j]
-        for j in range(T.shape[1]):
+        for j in range(b):
             out[k, a + j] = T[t, j]
+        if out.shape[1] > a + b:
+            out[k, a + b] = keys[k]
 
 
 def _masked_row(r, q_list, t_list, q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, out, start, write):
@@ -333,17 +351,19 @@ def touching_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, t_list):
 
 
 @jit(parallel=True)
-def kept_pairs(keys, m, Q, T, q_lo, q_hi, t_lo, t_hi, left, keep):
+def kept_pairs(keys, m, Q, T, q_lo, q_hi, t_lo, t_hi, mask, masked, left, keep):
     """Which pairs of an earlier search still qualify: ``keep[k]`` for the key ``keys[k] = q m + t``.
 
-    A pair is kept when the boxes of query `q` and target `t` overlap (the closed test of :func:`overlap`)
-    and neither holds a vertex of `left` (the vertices whose boxes left those of the earlier search: their
-    pairs are searched again).
+    A pair is kept when the boxes of query `q` and target `t` overlap (the closed test of :func:`overlap`),
+    neither holds a vertex of `left` (the vertices whose boxes left those of the earlier search: their
+    pairs are searched again), and, when `masked`, one of them holds a vertex of `mask` (the pairs
+    :func:`box_candidates` finds with that mask).
     """
     for k in prange(len(keys)):
         q, t = keys[k] // m, keys[k] % m
         keep[k] = (overlap(q_lo, q_hi, q, t_lo, t_hi, t) and not holds_masked(Q, q, left)
-                   and not holds_masked(T, t, left))
+                   and not holds_masked(T, t, left)
+                   and (not masked or holds_masked(Q, q, mask) or holds_masked(T, t, mask)))
 
 
 for _helper in (grid_shape, cell_of, cell_table, wanted, shares_vertex, holds_masked, cell_range, overlap, query, query_bound, _masked_row,):  # compiled into the kernels that call them

@@ -120,13 +120,17 @@ class CandidateCache:
         """Cached candidate rows whose boxes, swept over x0 -> x0 + dx, overlap when padded by `pad` / 2 each.
 
         With a mask `moved` (shape (n,)), only the pairs that hold one of those vertices. Returns the
-        vertex-face rows ``(vertex, a, b, c)`` and the edge-edge rows ``(p_1, p_2, q_1, q_2)``.
+        vertex-face rows ``(vertex, a, b, c)`` and the edge-edge rows ``(p_1, p_2, q_1, q_2)``, in the order of
+        their keys; with the compiled backend, with the key as a fifth column, in an order fixed by the
+        boxes (the compiled stages sort the pairs they keep by it: ``ordered=False`` of
+        :func:`particles.collisions.compiled_stages.cloth_candidate_rows`).
         """
         mesh = self.mesh
         fast = compiled_stages(self.backend, mesh.n)
         a, b = self.update(x0, dx, search=fast is None)
         if fast is not None:  # compiled: a search with the step's own boxes finds the pairs the cache would give
-            return fast.cloth_candidate_rows(mesh, np.minimum(a, b), np.maximum(a, b), 0.5 * pad, moved, self.memo)
+            return fast.cloth_candidate_rows(mesh, np.minimum(a, b), np.maximum(a, b), 0.5 * pad, moved, self.memo,
+                                             ordered=False)
         iv, jf = np.divmod(self.vf, max(mesh.m, 1))
         ie, je = np.divmod(self.ee, max(len(mesh.edges), 1))
         if moved is not None:

@@ -51,7 +51,7 @@ QUERY_WEIGHT = 16
 # impulse_kernels.BLOCKS, each on one thread): below twice as many, in one slice, in np.bincount's order
 JACOBI_PART_MIN = 4096
 
-# an unmasked search may take its pairs from the memo of an earlier one when at most one vertex in this many
+# a search may take its pairs from the memo of an earlier unmasked one when at most one vertex in this many
 # left that search's boxes (the pairs of those vertices are searched again: a masked search)
 LEFT_MAX = 64
 
@@ -66,51 +66,62 @@ def _corners(v_lo, v_hi, idx):
     return lo, hi
 
 
-def _keys(mesh, lo, hi, pad, vertices, memo=None):
-    """The sorted keys ``iv m + jf`` and ``ie e + je`` of :func:`cloth_candidates`' pairs (None where none).
+def _keys(mesh, lo, hi, pad, vertices, memo=None, ordered=True):
+    """The keys ``iv m + jf`` and ``ie e + je`` of :func:`cloth_candidates`' pairs (None where none), sorted when
+    `ordered` (else in an order fixed by the boxes).
 
-    With a `memo` (see :func:`cloth_candidate_rows`), taken from the pairs of its earlier search when the
-    boxes allow it, and kept there after a search without a mask.
+    With a `memo` (see :func:`cloth_candidate_rows`), taken from the pairs of its search when the boxes allow
+    it, and kept there after a search without a mask.
     """
     v_lo = np.ascontiguousarray(lo - pad)
     v_hi = np.ascontiguousarray(hi + pad)
-    if vertices is None and memo is not None and memo.get("v_lo") is not None and memo["v_lo"].shape == v_lo.shape:
+    masked = vertices is not None
+    mask = np.ascontiguousarray(vertices, dtype=np.bool_) if masked else _EMPTY_MASK
+    if memo is not None and memo.get("v_lo") is not None and memo["v_lo"].shape == v_lo.shape and (
+            memo["ordered"] or not ordered):
         left = np.any((v_lo < memo["v_lo"]) | (v_hi > memo["v_hi"]), axis=1)
-        if int(left.sum()) * LEFT_MAX <= mesh.n:
-            return _kept_keys(mesh, v_lo, v_hi, memo, left)
-    mask = _EMPTY_MASK if vertices is None else np.ascontiguousarray(vertices, dtype=np.bool_)
+        if int(left.sum()) * LEFT_MAX <= mesh.n and not (masked and left.any()):
+            return _kept_keys(mesh, v_lo, v_hi, memo["keys"], mask, masked, left, ordered)
+    keys = _searched(mesh, v_lo, v_hi, mask, masked, ordered)
+    if memo is not None and not masked:
+        memo.update(v_lo=v_lo, v_hi=v_hi, keys=keys, ordered=ordered)
+    return keys
+
+
+def _searched(mesh, v_lo, v_hi, mask, masked, ordered):
+    """The keys of the pairs whose padded vertex boxes ``v_lo, v_hi`` overlap (with `masked`, holding a vertex of
+    `mask`), searched: vertex-face and edge-edge (None for a kind the mesh lacks)."""
     wanted = (len(mesh.faces) > 0 and mesh.n > 0, len(mesh.edges) > 1)
-    vf, ee = (_search(*_boxes(v_lo, v_hi, Q, T, same), Q, T, same, mask, vertices is not None) if want else None
-              for (Q, T, same), want in zip(_kinds(mesh), wanted))  # the two kinds of pairs
-    if memo is not None and vertices is None:
-        memo.update(v_lo=v_lo, v_hi=v_hi, vf=vf, ee=ee)
-    return vf, ee
+    return tuple(_search(*_boxes(v_lo, v_hi, Q, T, same), Q, T, same, mask, masked, ordered) if want else None
+                 for (Q, T, same), want in zip(_kinds(mesh), wanted))  # the two kinds of pairs
 
 
-def _kept_keys(mesh, v_lo, v_hi, memo, left):
-    """:func:`_keys` from the memo's pairs: those still overlapping, and a search around the vertices `left`.
+def _kept_keys(mesh, v_lo, v_hi, keys, mask, masked, left, ordered):
+    """:func:`_keys` from a memo's `keys`: those still overlapping (holding a vertex of `mask` when `masked`), and
+    a search around the vertices `left`.
 
     Every vertex outside `left` has its padded box within the one of the memo's search, so a pair of
     them that overlaps now overlapped then and is among the memo's keys; the pairs that hold a vertex of
-    `left` are searched again (a masked search), and both sorted lists are merged.
+    `left` are searched again (a masked search; a masked call is served by the memo only when no vertex left).
     """
     out = []
-    for keys, (Q, T, same) in zip((memo["vf"], memo["ee"]), _kinds(mesh)):  # the two kinds of pairs
-        if keys is None:
+    for found, (Q, T, same) in zip(keys, _kinds(mesh)):  # the two kinds of pairs
+        if found is None:
             out.append(None)
             continue
         q_lo, q_hi, t_lo, t_hi = _boxes(v_lo, v_hi, Q, T, same)
-        keep = np.empty(len(keys), dtype=np.bool_)
-        pick(kept_pairs, len(keys))(keys, len(T), Q, T, q_lo, q_hi, t_lo, t_hi, left, keep)
-        found = keys[keep]
+        keep = np.empty(len(found), dtype=np.bool_)
+        pick(kept_pairs, len(found))(found, len(T), Q, T, q_lo, q_hi, t_lo, t_hi, mask, masked, left, keep)
+        found = found[keep]
         if left.any():
-            again = _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, left, True)
-            found = np.insert(found, np.searchsorted(found, again), again)  # disjoint sorted lists, merged
+            again = _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, left, True, ordered)
+            found = (np.insert(found, np.searchsorted(found, again), again) if ordered  # disjoint sorted lists
+                     else np.concatenate([found, again]))
         out.append(found)
     return tuple(out)
 
 
-def _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
+def _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked, ordered=True):
     """Keys of the overlapping pairs: the grid of :func:`box_candidates`, or, for a mask that touches few
     elements, every masked element tested against all (:func:`touching_candidates`, no grid to build)."""
     if masked:
@@ -119,9 +130,10 @@ def _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked):
         if int(q_in.sum()) * len(T) + len(Q) * len(t_list) <= GRID_TESTS * (len(Q) + len(T)):
             keys = pick(touching_candidates, QUERY_WEIGHT * len(Q))(q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in,
                                                                     t_list)
-            keys.sort()  # each pair is found once, by one row
+            if ordered:
+                keys.sort()  # each pair is found once, by one row
             return keys
-    return pick(box_candidates, QUERY_WEIGHT * len(Q))(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked)
+    return pick(box_candidates, QUERY_WEIGHT * len(Q))(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked, ordered)
 
 
 def _own(n):
@@ -163,7 +175,7 @@ def cloth_candidates(mesh, lo, hi, pad, vertices=None):
     return iv, jf, ie, je
 
 
-def cloth_candidate_rows(mesh, lo, hi, pad, vertices=None, memo=None):
+def cloth_candidate_rows(mesh, lo, hi, pad, vertices=None, memo=None, ordered=True):
     """:func:`cloth_candidates` as :func:`particles.collisions.candidates.pair_rows` gives them: ``vf, ee``.
 
     The vertex-face rows ``(vertex, a, b, c)`` and the edge-edge rows ``(p_1, p_2, q_1, q_2)``, shape
@@ -175,17 +187,32 @@ def cloth_candidate_rows(mesh, lo, hi, pad, vertices=None, memo=None):
         most one vertex in ``LEFT_MAX`` has a padded box outside its box there, the pairs are taken from
         that search's (those whose boxes still overlap) and only the pairs holding a vertex that left are
         searched again: the continuous test's searches within the boxes of the step's proximity search
-        filter its pairs instead of building a grid. The pairs are the same either way.
+        filter its pairs instead of building a grid (a masked search, when no vertex left). The pairs
+        are the same either way.
+    ordered : bool
+        False: the rows come in an order fixed by the boxes, with their key as a fifth column (shape
+        (k, 5)), and the caller sorts what it keeps by it (:func:`in_key_order`): the cloth pipeline keeps
+        a few thousand of hundreds of thousands of pairs, and sorting them all took half of its searches.
     """
-    vf, ee = _keys(mesh, lo, hi, pad, vertices, memo)
+    vf, ee = _keys(mesh, lo, hi, pad, vertices, memo, ordered)
     out = []
     for keys, (Q, T, _) in zip((vf, ee), _kinds(mesh)):  # the two kinds of pairs
-        rows = np.empty((0 if keys is None else len(keys), 4), dtype=np.int64)
+        rows = np.empty((0 if keys is None else len(keys), 4 if ordered else 5), dtype=np.int64)
         if len(rows):
             pick(key_rows, len(rows))(keys, len(T), np.ascontiguousarray(Q, dtype=np.int64),
                                       np.ascontiguousarray(T, dtype=np.int64), rows)
         out.append(rows)
     return tuple(out)
+
+
+def in_key_order(rows, keep):
+    """The indices of the rows where `keep` holds, in the order of the rows' keys: with rows of
+    :func:`cloth_candidate_rows` of four columns (sorted already), ``flatnonzero(keep)``; of five, sorted by the
+    fifth (the key)."""
+    kept = np.flatnonzero(keep)
+    if rows.shape[1] == 5 and len(kept) > 1:
+        kept = kept[np.argsort(rows[kept, 4], kind="stable")]
+    return kept
 
 
 def cloth_closest(x, rows, edge, parallel_tol):
@@ -214,7 +241,8 @@ def cloth_proximity(x0, vbar, w, x_rest, rows, edge, h, thickness, rest_distance
     xr = np.ascontiguousarray(x_rest) if rest else np.zeros((0, 3))
     pick(proximity_rows, k)(np.ascontiguousarray(x0), np.ascontiguousarray(vbar), w, xr, rest, rows, edge,
                             float(h), thickness, rest_distance, parallel_tol, keep, distance, normal, weights)
-    return rows[keep], weights[keep], normal[keep], distance[keep]
+    kept = in_key_order(rows, keep)
+    return rows[kept, :4], weights[kept], normal[kept], distance[kept]
 
 
 def cloth_first_contacts(x0, dx, rows, edge, eta, ftol, bisections, parallel_tol):
@@ -227,7 +255,8 @@ def cloth_first_contacts(x0, dx, rows, edge, eta, ftol, bisections, parallel_tol
     time, normal, weights = np.empty(k), np.empty((k, 3)), np.empty((k, 4))
     pick(first_contact_pairs, k)(np.ascontiguousarray(x0), np.ascontiguousarray(dx), rows, edge, eta, ftol,
                                  bisections, parallel_tol, hit, time, normal, weights)
-    return rows[hit], weights[hit], normal[hit], time[hit]
+    kept = in_key_order(rows, hit)
+    return rows[kept, :4], weights[kept], normal[kept], time[kept]
 
 
 _NO_BODIES = (np.zeros(0, dtype=np.int64), np.zeros((0, 13)))

@@ -84,8 +84,10 @@ def test_a_search_within_an_earlier_ones_boxes_gives_the_pairs_of_a_new_search(l
         np.testing.assert_array_equal(a, b)
 
 
-def test_a_masked_search_neither_reads_nor_replaces_the_memo():
-    """The memo holds the pairs of a search without a mask only: a masked search leaves it as it was."""
+@pytest.mark.parametrize("left", [0, 1], ids=["every box within", "a vertex left its box"])
+def test_a_masked_search_reads_the_memo_when_no_vertex_left_it_and_never_replaces_it(left, monkeypatch):
+    """The memo holds the pairs of a search without a mask: a masked search within its boxes filters them (the
+    continuous test's passes after the first), one with a vertex outside searches; the memo stays as it was."""
     mesh, x, dx = crumpled(6)
     lo, hi = np.minimum(x, x + dx), np.maximum(x, x + dx)
     memo = {}
@@ -93,15 +95,70 @@ def test_a_masked_search_neither_reads_nor_replaces_the_memo():
     before = dict(memo)
     mask = np.zeros(mesh.n, dtype=bool)
     mask[::5] = True
+    lo[3] += left * 0.1  # vertex 3 (not in the mask) moves out of its box
+    hi[3] += left * 0.1
+    used = []
+    kept = cloth._kept_keys
+    monkeypatch.setattr(cloth, "_kept_keys", lambda *a: used.append(1) or kept(*a))
     got = cloth.cloth_candidate_rows(mesh, lo, hi, 0.01, mask, memo=memo)
     ref = cloth.cloth_candidate_rows(mesh, lo, hi, 0.01, mask)
+    assert bool(used) == (not left)
     assert all(memo[k] is before[k] for k in before)
+    assert len(ref[0]) > 10 and len(ref[1]) > 10
     for a, b in zip(ref, got):
         np.testing.assert_array_equal(a, b)
 
 
+def _in_key_order(rows):
+    """Rows of five columns (``ordered=False``) sorted by their key and stripped of it: the rows of four."""
+    assert rows.shape[1] == 5
+    return rows[cloth.in_key_order(rows, np.ones(len(rows), dtype=bool)), :4]
+
+
+@pytest.mark.parametrize("masked", [False, True])
+def test_unordered_rows_are_the_ordered_ones_with_their_keys(masked, monkeypatch):
+    """``ordered=False``: the same rows, each with its key, in an order fixed by the boxes (the same on one thread
+    and two, and from a search or a memo) and not the sorted one (the sort is what it spares)."""
+    mesh, x, dx = crumpled(7, n=24)
+    lo, hi = np.minimum(x, x + dx), np.maximum(x, x + dx)
+    mask = (np.arange(mesh.n) % 3 == 0) if masked else None
+    ref = cloth.cloth_candidate_rows(mesh, lo, hi, 0.02, mask)
+    runs = [cloth.cloth_candidate_rows(mesh, lo, hi, 0.02, mask, ordered=False)]
+    monkeypatch.setattr(cloth, "QUERY_WEIGHT", 10**9)  # every search parallel where threads exist
+    runs.append(cloth.cloth_candidate_rows(mesh, lo, hi, 0.02, mask, ordered=False))
+    memo = {}
+    cloth.cloth_candidate_rows(mesh, lo - 0.01, hi + 0.01, 0.02, memo=memo, ordered=False)
+    runs.append(cloth.cloth_candidate_rows(mesh, lo, hi, 0.02, mask, memo=memo, ordered=False))
+    for got in runs:
+        for a, b in zip(ref, got):
+            assert len(a) > 100
+            np.testing.assert_array_equal(_in_key_order(b), a)
+    assert not np.array_equal(runs[0][1][:, :4], ref[1])
+    for a, b in zip(runs[0], runs[1]):
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("edge", [False, True])
+def test_the_stages_keep_the_pairs_of_unordered_rows_in_key_order(edge):
+    """The proximity tests and the continuous test on unordered rows keep the pairs, and give the results, of
+    the sorted rows, in the same order."""
+    mesh, x, dx = crumpled(8, n=24, noise=0.005)
+    lo, hi = np.minimum(x, x + dx), np.maximum(x, x + dx)
+    ordered = cloth.cloth_candidate_rows(mesh, lo, hi, 0.02)[edge]
+    unordered = cloth.cloth_candidate_rows(mesh, lo, hi, 0.02, ordered=False)[edge]
+    w = np.ones(mesh.n)
+    runs = [(cloth.cloth_proximity(x, dx / H, w, None, rows, edge, H, 0.02, 0.04, PARALLEL),
+             cloth.cloth_first_contacts(x, dx, rows, edge, 1e-5, F_TOL, BISECTIONS, PARALLEL))
+            for rows in (ordered, unordered)]
+    assert len(runs[0][0][0]) > 5 and len(runs[0][1][0]) > 5
+    for a, b in zip(*runs):
+        for u, v in zip(a, b):
+            np.testing.assert_array_equal(u, v)
+
+
 def test_cached_pairs_are_the_numpy_rows():
-    """Compiled, CandidateCache.pairs (a search of the call's own boxes) gives the NumPy cache's rows, masked or not."""
+    """Compiled, CandidateCache.pairs (a search of the call's own boxes) gives the NumPy cache's rows (with their keys,
+    in another order), masked or not."""
     mesh, x, dx = crumpled(4)
     ccs = [ClothCollisions(mesh, 0.02, backend=b) for b in ("numpy", "numba")]
     moved = np.zeros(mesh.n, dtype=bool)
@@ -110,7 +167,7 @@ def test_cached_pairs_are_the_numpy_rows():
         ref, got = (cc.candidates.pairs(x, dx, 0.02, mask) for cc in ccs)
         assert len(ref[0]) > 0 and len(ref[1]) > 0
         for a, b in zip(ref, got):
-            np.testing.assert_array_equal(a, b)
+            np.testing.assert_array_equal(a, _in_key_order(b))
 
 
 def test_pairs_agree_as_the_cache_is_reused_grown_and_searched_again():
@@ -127,7 +184,7 @@ def test_pairs_agree_as_the_cache_is_reused_grown_and_searched_again():
         x = np.ascontiguousarray(x + move + 0.1)  # and a common translation
         ref, got = (cc.candidates.pairs(x, 0.2 * dx, 0.02) for cc in ccs)
         for a, b in zip(ref, got):
-            np.testing.assert_array_equal(a, b)
+            np.testing.assert_array_equal(a, _in_key_order(b))
     assert ccs[0].searches == ccs[1].searches > 1
 
 
@@ -359,13 +416,13 @@ def test_same_bits_on_one_and_two_threads():
             f_lo, f_hi = np.empty((mesh.m, 3)), np.empty((mesh.m, 3))
             from particles.collisions.broad_kernels import corner_bounds  # noqa: PLC0415
             corner_bounds(v_lo, v_hi, mesh.faces, f_lo, f_hi)
-            keys = box_candidates(v_lo, v_hi, f_lo, f_hi, cloth._own(mesh.n), mesh.faces, False,
-                                  np.zeros(0, dtype=bool), False)
+            keys = [box_candidates(v_lo, v_hi, f_lo, f_hi, cloth._own(mesh.n), mesh.faces, False,
+                                   np.zeros(0, dtype=bool), False, ordered) for ordered in (True, False)]
             rows = rows_of(k)
             hit, t = np.empty(len(rows), dtype=bool), np.full(len(rows), np.nan)
             nrm, w = np.full((len(rows), 3), np.nan), np.full((len(rows), 4), np.nan)
             first_contact_pairs(x, 4 * dx, rows, False, 1e-5, F_TOL, BISECTIONS, PARALLEL, hit, t, nrm, w)
-            out.append((keys, hit, t[hit], nrm[hit], w[hit]))
+            out.append((*keys, hit, t[hit], nrm[hit], w[hit]))
     finally:
         numba.set_num_threads(before)
     for a, b in zip(*out):
