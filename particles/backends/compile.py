@@ -31,6 +31,7 @@ which may be read-only and whose files the grader checksums.
 """
 
 import hashlib
+import inspect
 import os
 import tempfile
 import time
@@ -46,7 +47,7 @@ try:
 except ImportError:  # without the extra: importable (a walk over the package), never called
     numba, prange = None, range
 
-__all__ = ["jit", "inline", "prange", "pick", "parallel", "PARALLEL_MIN", "numba"]
+__all__ = ["jit", "inline", "kernel_form", "prange", "pick", "parallel", "PARALLEL_MIN", "numba"]
 
 if numba is not None:  # numba's own pedantic check, on a law inlined into a kernel with a branch: benign
     warnings.filterwarnings("ignore", message="variable '.*' is not in scope", category=numba.NumbaIRAssumptionWarning)
@@ -153,6 +154,26 @@ def inline(law, into="always"):
 
 
 _INLINED = set()
+
+
+def kernel_form(law):
+    """Decorate the form compiled kernels run for `law`: the same laws, each branch computed only where taken.
+
+    A law written for NumPy and kernels alike chooses with ``select``, which computes both of its
+    arguments first; where one is costly (an ``acos``) or the fallbacks are many, the kernel's form
+    branches before computing. The form takes the law's arguments. Without numba the kernels run as
+    Python, with the law itself, and the form is not used.
+    """
+    def register(form):
+        if numba is not None:
+            from numba.extending import overload  # noqa: PLC0415
+
+            def typing(*args):
+                return form
+            typing.__signature__ = inspect.signature(form)  # numba matches it with the form's
+            overload(law)(typing)
+        return form
+    return register
 
 
 def _register_vector_helpers():

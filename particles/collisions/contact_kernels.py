@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from .._vectors import vdot, vsub
-from ..backends.compile import inline, jit, prange
+from ..backends.compile import inline, jit, kernel_form, prange
 from .ccd import bernstein, cubic_of, cubic_unit_roots, horner, impact_normal, piece_root, sorted_nan_last, triple
 from .proximity import (any_perpendicular, approaching_within, clip01, nearest_edge_weights, normal_or, plane_weights,
                         segment_closest, segments_closest, triangle_contact, unit_or)
@@ -27,25 +27,14 @@ for _law in (piece_root, cubic_unit_roots):  # laws with a loop: a function of t
     inline(_law, into="never")
 
 
-def _register_normal_or():
+@kernel_form(normal_or)
+def normal_or_in_kernels(v, n, g):
     """:func:`~particles.collisions.proximity.normal_or` in a kernel: its fallbacks computed only where used."""
-    try:
-        from numba.extending import overload  # noqa: PLC0415
-    except ImportError:  # without numba the kernels run as plain Python, with normal_or itself
-        return
-
-    @overload(normal_or)
-    def _normal_or(v, n, g):
-        def lazy(v, n, g):
-            if vdot(v, v) > 0:
-                return unit_or(v, v)
-            if vdot(n, n) > 0:
-                return unit_or(n, n)
-            return any_perpendicular(g)
-        return lazy
-
-
-_register_normal_or()
+    if vdot(v, v) > 0:
+        return unit_or(v, v)
+    if vdot(n, n) > 0:
+        return unit_or(n, n)
+    return any_perpendicular(g)
 
 
 def row3(x, i):

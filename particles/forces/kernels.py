@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from ..backends.compile import inline, jit, parallel, pick, prange
+from ..backends.compile import inline, jit, kernel_form, parallel, pick, prange
 from ..backends.layout import incidence
 from .pairs import gravitational_pull, integer_power, lennard_jones_virial
 from .springs import STRAIGHT_RANGE, TINY, bent_ratio, damped_spring_force, joint_factor, straight_ratio
@@ -39,29 +39,15 @@ inline(integer_power, into="never")
 inline(lennard_jones_virial)
 
 
+@kernel_form(joint_factor)
+def joint_factor_in_kernels(c, theta0, kb):
+    """:func:`~particles.forces.springs.joint_factor` in a kernel: a joint takes the series or the ``acos``,
+    and only the one it takes is computed (the same laws)."""
+    x = 1.0 - c
+    if x < STRAIGHT_RANGE and theta0 == 0.0:
+        return kb * straight_ratio(x)
+    return kb * bent_ratio(c, theta0)
 
-def _register_joint_factor():
-    """:func:`~particles.forces.springs.joint_factor` in a kernel: only the branch a joint takes is computed.
-
-    ``select`` in a kernel is a plain branch, but its two arguments are computed before it; a joint
-    takes either the series or the ``acos``, so the kernel's form chooses first (the same laws).
-    """
-    try:
-        from numba.extending import overload  # noqa: PLC0415
-    except ImportError:  # without numba the kernels run as plain Python, with joint_factor itself
-        return
-
-    @overload(joint_factor)
-    def _joint_factor(c, theta0, kb):
-        def lazy(c, theta0, kb):
-            x = 1.0 - c
-            if x < STRAIGHT_RANGE and theta0 == 0.0:
-                return kb * straight_ratio(x)
-            return kb * bent_ratio(c, theta0)
-        return lazy
-
-
-_register_joint_factor()
 
 # the two-pass parallel spring pass writes and reads every spring's force once more than the one-thread
 # scatter: it pays from about this many threads (on two it was slower, bench/bench_backends.py)

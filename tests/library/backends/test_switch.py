@@ -7,6 +7,7 @@ import sys
 import pytest
 
 from particles import backends
+from particles._vectors import select
 from particles.forces import LennardJones
 from particles.forces import Springs
 
@@ -160,3 +161,38 @@ def test_the_threads_are_openmp_with_a_bounded_spin_unless_the_user_chose(chosen
     else:  # OpenMP wherever numba's OpenMP pool loads; the work queue only where it cannot
         omp = subprocess.run([sys.executable, "-c", _OMP_LOADS], env=env).returncode == 0
         assert (layer, spin) == ("omp" if omp else "workqueue", "10000")
+
+
+
+def _ratio_or_zero(a, b):
+    """A law written for arrays and kernels alike: ``a / b`` where ``b != 0``, else 0 (``select`` computes both)."""
+    return select(b != 0.0, a / b, 0.0)
+
+
+def _ratio_or_zero_again(a, b):
+    """The same law again, to be given a kernel form (a law has one form for every kernel)."""
+    return select(b != 0.0, a / b, 0.0)
+
+
+@needs_numba
+def test_a_kernel_form_computes_only_the_branch_taken():
+    """A law's kernel form (kernel_form) is what kernels run: compiled, the law itself divides by zero (numba
+    raises), its form does not; the form agrees with the law where both are defined."""
+    import numba  # noqa: PLC0415
+
+    from particles.backends.compile import inline, kernel_form  # noqa: PLC0415
+
+    inline(_ratio_or_zero)
+    plain = numba.njit(lambda a, b: _ratio_or_zero(a, b))
+    with pytest.raises(ZeroDivisionError):
+        plain(1.0, 0.0)
+
+    @kernel_form(_ratio_or_zero_again)
+    def ratio_in_kernels(a, b):
+        if b != 0.0:
+            return a / b
+        return 0.0
+
+    kernel = numba.njit(lambda a, b: _ratio_or_zero_again(a, b))
+    assert kernel(1.0, 0.0) == 0.0
+    assert kernel(3.0, 4.0) == float(_ratio_or_zero_again(3.0, 4.0)) == 0.75
