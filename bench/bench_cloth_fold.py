@@ -29,7 +29,7 @@ XPBD from 1024 particles, :data:`particles.xpbd.solver.XPBD_WEIGHT`);
 stage's Jacobi iterations (``ClothCollisions``' default, 50, otherwise; 20 was no faster on the fold's
 worst step, 215 ms, and let pairs come closer, 0.00 of the thickness against 0.02).
 
-    python bench/bench_cloth_fold.py            # 64^2 (with --no-baseline: 1 min 30 s on 2026-12-08)
+    python bench/bench_cloth_fold.py            # 64^2 (with --no-baseline: 1 min 21 s on 2026-12-08)
     python bench/bench_cloth_fold.py --n 32 --compare   # NumPy against numba
     python bench/bench_cloth_fold.py --xpbd-sizes       # XPBD alone per size: where "auto" compiles it
     python bench/bench_cloth_fold.py --n 32 --peer newton --steps 20 --no-baseline   # beside Newton's VBD
