@@ -13,7 +13,9 @@ and the closed boxes are then compared exactly: the set of pairs does
 not depend on the grid, and it is the NumPy one. Each query writes its own
 slice of the output (sized by a bound from the cells it covers, each slice
 sorted), so the pairs come out sorted by key and with the same bits on any
-number of threads; no atomics.
+number of threads; no atomics. The pairs that hold a vertex of a mask (a few
+vertices that moved) come from small grids of the masked elements alone
+(:func:`subset_pairs`).
 """
 
 import math
@@ -88,8 +90,8 @@ def cell_of(x, origin, cell, shape, a):
     return min(max(c, 0), shape[a] - 1)
 
 
-def cell_table(t_lo, t_hi, origin, cell, shape, keep):
-    """The targets where `keep` is True per cell, in compressed rows of 8 sublists per cell: ``ptr`` (8 cells
+def cell_table(t_lo, t_hi, origin, cell, shape):
+    """The targets per cell, in compressed rows of 8 sublists per cell: ``ptr`` (8 cells
     + 1) and ``items``.
 
     Sublist ``8 c + s`` of cell ``c = (i, j, l)`` holds the targets whose lowest cell is ``i`` along the
@@ -106,8 +108,6 @@ def cell_table(t_lo, t_hi, origin, cell, shape, keep):
         for a in range(3):
             low[k, a] = cell_of(t_lo[k, a], origin, cell, shape, a)
             high[k, a] = cell_of(t_hi[k, a], origin, cell, shape, a)
-        if not keep[k]:
-            continue
         for i in range(low[k, 0], high[k, 0] + 1):
             for j in range(low[k, 1], high[k, 1] + 1):
                 for l in range(low[k, 2], high[k, 2] + 1):
@@ -118,8 +118,6 @@ def cell_table(t_lo, t_hi, origin, cell, shape, keep):
     fill = ptr[:-1].copy()
     items = np.empty(ptr[8 * cells], dtype=np.int64)
     for k in range(len(t_lo)):  # in increasing target: each sublist is sorted
-        if not keep[k]:
-            continue
         for i in range(low[k, 0], high[k, 0] + 1):
             for j in range(low[k, 1], high[k, 1] + 1):
                 for l in range(low[k, 2], high[k, 2] + 1):
@@ -217,43 +215,22 @@ def query_bound(q, q_lo, q_hi, origin, cell, shape, ptr):
 
 
 @jit(parallel=True)
-def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked, ordered):
+def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, ordered):
     """Keys ``q len(T) + t`` of the overlapping query-target pairs that share no vertex, sorted when `ordered`.
 
     Parameters: the boxes ``(lo, hi)`` of the queries and the targets (shape (k, 3)), their vertices `Q`
-    and `T` (index tables), `same` (one set: pairs ``q < t``), and a vertex `mask` used when `masked`.
-    Each query writes into its own slice of a buffer sized by :func:`query_bound` (one pass of tests),
-    sorts it when `ordered`, and the slices are joined in query order. Unsorted, the keys come in an order
-    fixed by the boxes alone (the grid's walk; the same on any number of threads): sorting the slices took
-    half of the fold's searches, and a caller that keeps few of the pairs sorts those. With `masked`, a query that holds no masked
-    vertex walks a second table, of the targets that hold one, and only when its box meets the box around
-    those targets (the continuous test's searches after the first, where a few vertices still move, walk a
-    few boxes instead of all).
+    and `T` (index tables), `same` (one set: pairs ``q < t``). Each query writes into its own slice of a
+    buffer sized by :func:`query_bound` (one pass of tests), sorts it when `ordered`, and the slices are
+    joined in query order. Unsorted, the keys come in an order fixed by the boxes alone (the grid's walk;
+    the same on any number of threads): sorting the slices took half of the fold's searches, and a caller
+    that keeps few of the pairs sorts those. The pairs that hold a vertex of a mask: :func:`subset_pairs`.
     """
     origin, cell, shape = grid_shape(q_lo, q_hi, t_lo, t_hi)
-    ptr, items = cell_table(t_lo, t_hi, origin, cell, shape, np.ones(len(t_lo), dtype=np.bool_))
+    ptr, items = cell_table(t_lo, t_hi, origin, cell, shape)
     nq = len(q_lo)
-    q_in = np.zeros(nq, dtype=np.bool_)
-    ptr_in, items_in = ptr, items  # with a mask: the table of the targets that hold a masked vertex
-    reach = np.empty((2, 3))  # with a mask: the box around the masked targets' boxes
-    if masked:
-        t_in = np.empty(len(t_lo), dtype=np.bool_)
-        reach[0], reach[1] = np.inf, -np.inf
-        for t in range(len(t_lo)):
-            t_in[t] = holds_masked(T, t, mask)
-            if t_in[t]:
-                for a in range(3):
-                    reach[0, a] = min(reach[0, a], t_lo[t, a])
-                    reach[1, a] = max(reach[1, a], t_hi[t, a])
-        for q in range(nq):
-            q_in[q] = holds_masked(Q, q, mask)
-        ptr_in, items_in = cell_table(t_lo, t_hi, origin, cell, shape, t_in)
     bounds = np.zeros(nq + 1, dtype=np.int64)
-    for q in prange(nq):  # a query outside the mask walks the masked targets' table only, if it reaches them
-        if q_in[q] or not masked:
-            bounds[q + 1] = query_bound(q, q_lo, q_hi, origin, cell, shape, ptr)
-        elif overlap(q_lo, q_hi, q, reach[:1], reach[1:], 0):
-            bounds[q + 1] = query_bound(q, q_lo, q_hi, origin, cell, shape, ptr_in)
+    for q in prange(nq):
+        bounds[q + 1] = query_bound(q, q_lo, q_hi, origin, cell, shape, ptr)
     for q in range(nq):
         bounds[q + 1] += bounds[q]
     found = np.zeros(nq + 1, dtype=np.int64)
@@ -262,11 +239,7 @@ def box_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked, ordered):
     for b in prange(blocks):  # each block of queries alone, each query into its own slice
         for q in range(b * QUERY_BLOCK, min(nq, (b + 1) * QUERY_BLOCK)):
             s = bounds[q]
-            whole = q_in[q] or not masked
-            if bounds[q + 1] == s:  # nothing to walk (a query that reaches no masked target)
-                continue
-            f = query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr if whole else ptr_in,
-                      items if whole else items_in, Q, T, same, targets, s)
+            f = query(q, q_lo, q_hi, t_lo, t_hi, origin, cell, shape, ptr, items, Q, T, same, targets, s)
             if ordered:
                 targets[s:s + f].sort()
             found[q + 1] = f
@@ -300,71 +273,115 @@ def key_rows(keys, m, Q, T, out):
             out[k, a + b] = keys[k]
 
 
-def _masked_row(r, q_list, t_list, q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, out, start, write):
-    """Row `r` of :func:`touching_candidates`' pairs, written into ``out[start:]`` when `write`; their count.
+def subset_grid(lo, hi, idx):
+    """A grid of the boxes ``lo[idx], hi[idx]`` alone: their boxes (gathered), the grid's origin, cell and shape,
+    its table ``ptr, items`` (items index `idx`) and ``reach``, the box around them (shape (2, 3))."""
+    s_lo = np.empty((len(idx), 3))
+    s_hi = np.empty((len(idx), 3))
+    reach = np.empty((2, 3))
+    reach[0], reach[1] = np.inf, -np.inf
+    for e in range(len(idx)):
+        for a in range(3):
+            s_lo[e, a] = lo[idx[e], a]
+            s_hi[e, a] = hi[idx[e], a]
+            reach[0, a] = min(reach[0, a], s_lo[e, a])
+            reach[1, a] = max(reach[1, a], s_hi[e, a])
+    origin, cell, shape = grid_shape(s_lo, s_hi, s_lo, s_hi)
+    ptr, items = cell_table(s_lo, s_hi, origin, cell, shape)
+    return s_lo, s_hi, origin, cell, shape, ptr, items, reach
 
-    Row ``r < len(q_list)``: masked query ``q = q_list[r]`` against every target (``t > q`` when `same`);
-    a later row: masked target ``t = t_list[r - len(q_list)]`` against every query that holds no masked
-    vertex (``q < t`` when `same`), whose pairs with masked queries are their rows'. Keys ``q len(T) + t``.
+
+def walk_subset(k, w_lo, w_hi, W, idx, s_lo, s_hi, S, origin, cell, shape, ptr, items, reach, rule, m, out, start,
+                write):
+    """Walker `k`'s pairs with the elements ``idx`` of a :func:`subset_grid`: keys written into ``out[start:]`` when
+    `write`; their count.
+
+    A pair is an overlap of the closed boxes of walker `k` (``w_lo, w_hi``, vertices ``W[k]``) and element
+    ``s = idx[e]`` (``s_lo[e], s_hi[e]``, vertices ``S[s]``) that shares no vertex. Its key, by `rule`:
+    0, the walker a query and the element a target, ``k m + s``; 1, the walker a target and the element a
+    query, ``s m + k``; 2, one set (edges against edges), ``min m + max``, and a walker that is itself an
+    element of the grid (rule 3) keeps only the elements above it, so that a pair of two elements is met once.
+    Each element is met in one cell, the componentwise maximum of the two boxes' lowest cells (:func:`wanted`).
     """
-    m, found = len(t_lo), 0
-    if r < len(q_list):
-        q = q_list[r]
-        for t in range(q + 1 if same else 0, m):  # one long loop over the targets, one box against many
-            if overlap(q_lo, q_hi, q, t_lo, t_hi, t) and not shares_vertex(Q, q, T, t):
-                if write:
-                    out[start + found] = q * m + t
-                found += 1
-        return found
-    t = t_list[r - len(q_list)]
-    for q in range(t if same else len(q_lo)):
-        if overlap(q_lo, q_hi, q, t_lo, t_hi, t) and not q_in[q] and not shares_vertex(Q, q, T, t):
-            if write:
-                out[start + found] = q * m + t
-            found += 1
+    if not overlap(w_lo, w_hi, k, reach[:1], reach[1:], 0):
+        return 0
+    found = 0
+    c00, c10, c01, c11, c02, c12 = cell_range(k, w_lo, w_hi, origin, cell, shape)
+    for i in range(c00, c10 + 1):
+        for j in range(c01, c11 + 1):
+            for l in range(c02, c12 + 1):
+                c = 8 * ((i * shape[1] + j) * shape[2] + l)
+                for sub in range(8):
+                    if not wanted(sub, i, j, l, c00, c01, c02):
+                        continue
+                    for p in range(ptr[c + sub], ptr[c + sub + 1]):
+                        e = items[p]
+                        s = idx[e]
+                        if rule == 3 and s <= k:
+                            continue
+                        if not overlap(w_lo, w_hi, k, s_lo, s_hi, e) or shares_vertex(W, k, S, s):
+                            continue
+                        if write:
+                            if rule == 1:
+                                out[start + found] = s * m + k
+                            elif rule == 0 or s > k:
+                                out[start + found] = k * m + s
+                            else:
+                                out[start + found] = s * m + k
+                        found += 1
     return found
 
 
 @jit(parallel=True)
-def touching_candidates(q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, t_list):
-    """:func:`box_candidates` with a mask touching few elements, without a grid: the keys ``q len(T) + t``, unsorted.
+def subset_pairs(w_lo, w_hi, W, walking, own, idx, lo, hi, S, rule, m):
+    """The keys of the pairs of every walker where `walking` holds with the elements `idx` of boxes ``lo, hi``
+    (vertices `S`), from a grid of those elements alone (:func:`subset_grid`; :func:`walk_subset`, with
+    `rule`, or rule 3 for a walker where `own` holds), unsorted: walker by walker, an order fixed by the
+    boxes, the same on any number of threads.
 
-    The queries that hold a masked vertex (`q_in`) are tested against every target, and the targets that
-    hold one (`t_list`, increasing) against every other query: the pairs of :func:`box_candidates`, as
-    :func:`particles.collisions.candidates.candidates_touching` tests them. One row per masked element,
-    each a long loop over all the others (a short loop over the masked ones per query took twice as
-    long); counted, then written, in row order: the caller sorts them (NumPy's sort of these few keys
-    takes microseconds, and numba's compiled into this kernel took a third of its compile time).
+    The pairs of a mask are few: :func:`particles.collisions.compiled_stages`' masked search calls this
+    with the masked targets (walked by every query) and the masked queries (walked by the targets that hold
+    no masked vertex). Around 14 moved vertices of the 64^2 fold's pile-up the whole grid, walked by the
+    masked elements and every query near them, took 4 ms, and filtering the pairs of the step's first
+    search 6 ms; these small grids take a fraction of a millisecond.
     """
-    q_list = np.flatnonzero(q_in)
-    rows = len(q_list) + len(t_list)
-    found = np.zeros(rows + 1, dtype=np.int64)
+    if len(idx) == 0:
+        return np.zeros(0, dtype=np.int64)
+    s_lo, s_hi, origin, cell, shape, ptr, items, reach = subset_grid(lo, hi, idx)
+    nw = len(w_lo)
+    found = np.zeros(nw + 1, dtype=np.int64)
     empty = np.zeros(0, dtype=np.int64)
-    for r in prange(rows):
-        found[r + 1] = _masked_row(r, q_list, t_list, q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, empty, 0, False)
-    for r in range(rows):
-        found[r + 1] += found[r]
-    keys = np.empty(found[rows], dtype=np.int64)
-    for r in prange(rows):
-        _masked_row(r, q_list, t_list, q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in, keys, found[r], True)
+    blocks = (nw + QUERY_BLOCK - 1) // QUERY_BLOCK
+    for b in prange(blocks):  # each walker's count
+        for k in range(b * QUERY_BLOCK, min(nw, (b + 1) * QUERY_BLOCK)):
+            if walking[k]:
+                found[k + 1] = walk_subset(k, w_lo, w_hi, W, idx, s_lo, s_hi, S, origin, cell, shape, ptr, items,
+                                           reach, 3 if own[k] else rule, m, empty, 0, False)
+    for k in range(nw):
+        found[k + 1] += found[k]
+    keys = np.empty(found[nw], dtype=np.int64)
+    for b in prange(blocks):  # each walker's keys, into its slice
+        for k in range(b * QUERY_BLOCK, min(nw, (b + 1) * QUERY_BLOCK)):
+            if found[k + 1] > found[k]:
+                walk_subset(k, w_lo, w_hi, W, idx, s_lo, s_hi, S, origin, cell, shape, ptr, items, reach,
+                            3 if own[k] else rule, m, keys, found[k], True)
     return keys
 
 
 @jit(parallel=True)
-def kept_pairs(keys, m, Q, T, q_lo, q_hi, t_lo, t_hi, mask, masked, left, keep):
+def kept_pairs(keys, m, Q, T, q_lo, q_hi, t_lo, t_hi, left, keep):
     """Which pairs of an earlier search still qualify: ``keep[k]`` for the key ``keys[k] = q m + t``.
 
-    A pair is kept when the boxes of query `q` and target `t` overlap (the closed test of :func:`overlap`),
-    neither holds a vertex of `left` (the vertices whose boxes left those of the earlier search: their
-    pairs are searched again), and, when `masked`, one of them holds a vertex of `mask` (the pairs
-    :func:`box_candidates` finds with that mask).
+    A pair is kept when the boxes of query `q` and target `t` overlap (the closed test of :func:`overlap`)
+    and neither holds a vertex of `left` (the vertices whose boxes left those of the earlier search: their
+    pairs are searched again).
     """
     for k in prange(len(keys)):
         q, t = keys[k] // m, keys[k] % m
         keep[k] = (overlap(q_lo, q_hi, q, t_lo, t_hi, t) and not holds_masked(Q, q, left)
-                   and not holds_masked(T, t, left)
-                   and (not masked or holds_masked(Q, q, mask) or holds_masked(T, t, mask)))
+                   and not holds_masked(T, t, left))
 
 
-for _helper in (grid_shape, cell_of, cell_table, wanted, shares_vertex, holds_masked, cell_range, overlap, query, query_bound, _masked_row,):  # compiled into the kernels that call them
+for _helper in (grid_shape, cell_of, cell_table, wanted, shares_vertex, holds_masked, cell_range, overlap, query,
+                query_bound, subset_grid, walk_subset):  # compiled into the kernels that call them
     inline(_helper, into="never")

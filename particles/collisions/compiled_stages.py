@@ -10,8 +10,8 @@ numba. Each returns what the NumPy stage it replaces returns:
   sorted sets: a bucket grid walked box by box, :mod:`particles.collisions.broad_kernels`);
   :meth:`~particles.collisions.candidate_cache.CandidateCache.pairs` searches each call's own boxes with it,
   which gives the rows its cache would (the cache only ever holds more pairs than the boxes select); a
-  masked search that touches few elements tests them against every box instead of building a grid
-  (:func:`particles.collisions.broad_kernels.touching_candidates`), and a search within the boxes of an
+  masked search walks small grids of the masked elements alone
+  (:func:`particles.collisions.broad_kernels.subset_pairs`), and a search within the boxes of an
   earlier one filters that search's pairs (:func:`particles.collisions.broad_kernels.kept_pairs`) and
   searches again only around the vertices that left them;
 * :func:`cloth_closest`, :func:`cloth_first_contacts`: the closest points
@@ -33,7 +33,7 @@ import numpy as np
 
 from ..backends.compile import pick
 from .body_kernels import body_vertices, low_edge_samples
-from .broad_kernels import box_candidates, corner_bounds, key_rows, kept_pairs, touching_candidates
+from .broad_kernels import box_candidates, corner_bounds, key_rows, kept_pairs, subset_pairs
 from .collider_kernels import surface_rows
 from .contact_kernels import closest_pairs, first_contact_pairs, proximity_rows
 from .impulse_kernels import BLOCKS, proximity_impulses
@@ -51,13 +51,9 @@ QUERY_WEIGHT = 16
 # impulse_kernels.BLOCKS, each on one thread): below twice as many, in one slice, in np.bincount's order
 JACOBI_PART_MIN = 4096
 
-# a search may take its pairs from the memo of an earlier unmasked one when at most one vertex in this many
+# an unmasked search may take its pairs from the memo of an earlier one when at most one vertex in this many
 # left that search's boxes (the pairs of those vertices are searched again: a masked search)
 LEFT_MAX = 64
-
-# a grid search costs about as much as this many box tests per query and target (building the grid and its
-# tables, walking the cells): a masked search that needs fewer tests element against element makes none
-GRID_TESTS = 64
 
 
 def _corners(v_lo, v_hi, idx):
@@ -70,39 +66,40 @@ def _keys(mesh, lo, hi, pad, vertices, memo=None, ordered=True):
     """The keys ``iv m + jf`` and ``ie e + je`` of :func:`cloth_candidates`' pairs (None where none), sorted when
     `ordered` (else in an order fixed by the boxes).
 
-    With a `memo` (see :func:`cloth_candidate_rows`), taken from the pairs of its search when the boxes allow
-    it, and kept there after a search without a mask.
+    Without a mask, with a `memo` (see :func:`cloth_candidate_rows`): taken from the pairs of its search when
+    the boxes allow it, and kept there after a search. A masked search (a few vertices) walks grids of the
+    masked elements alone and neither reads nor replaces the memo.
     """
     v_lo = np.ascontiguousarray(lo - pad)
     v_hi = np.ascontiguousarray(hi + pad)
     masked = vertices is not None
-    mask = np.ascontiguousarray(vertices, dtype=np.bool_) if masked else _EMPTY_MASK
+    if masked:
+        return _searched(mesh, v_lo, v_hi, np.ascontiguousarray(vertices, dtype=np.bool_), ordered)
     if memo is not None and memo.get("v_lo") is not None and memo["v_lo"].shape == v_lo.shape and (
             memo["ordered"] or not ordered):
         left = np.any((v_lo < memo["v_lo"]) | (v_hi > memo["v_hi"]), axis=1)
-        if int(left.sum()) * LEFT_MAX <= mesh.n and not (masked and left.any()):
-            return _kept_keys(mesh, v_lo, v_hi, memo["keys"], mask, masked, left, ordered)
-    keys = _searched(mesh, v_lo, v_hi, mask, masked, ordered)
-    if memo is not None and not masked:
+        if int(left.sum()) * LEFT_MAX <= mesh.n:
+            return _kept_keys(mesh, v_lo, v_hi, memo["keys"], left, ordered)
+    keys = _searched(mesh, v_lo, v_hi, None, ordered)
+    if memo is not None:
         memo.update(v_lo=v_lo, v_hi=v_hi, keys=keys, ordered=ordered)
     return keys
 
 
-def _searched(mesh, v_lo, v_hi, mask, masked, ordered):
-    """The keys of the pairs whose padded vertex boxes ``v_lo, v_hi`` overlap (with `masked`, holding a vertex of
-    `mask`), searched: vertex-face and edge-edge (None for a kind the mesh lacks)."""
+def _searched(mesh, v_lo, v_hi, mask, ordered):
+    """The keys of the pairs whose padded vertex boxes ``v_lo, v_hi`` overlap (holding a vertex of `mask` unless
+    None), searched: vertex-face and edge-edge (None for a kind the mesh lacks)."""
     wanted = (len(mesh.faces) > 0 and mesh.n > 0, len(mesh.edges) > 1)
-    return tuple(_search(*_boxes(v_lo, v_hi, Q, T, same), Q, T, same, mask, masked, ordered) if want else None
+    return tuple(_search(*_boxes(v_lo, v_hi, Q, T, same), Q, T, same, mask, ordered) if want else None
                  for (Q, T, same), want in zip(_kinds(mesh), wanted))  # the two kinds of pairs
 
 
-def _kept_keys(mesh, v_lo, v_hi, keys, mask, masked, left, ordered):
-    """:func:`_keys` from a memo's `keys`: those still overlapping (holding a vertex of `mask` when `masked`), and
-    a search around the vertices `left`.
+def _kept_keys(mesh, v_lo, v_hi, keys, left, ordered):
+    """:func:`_keys` from a memo's `keys`: those still overlapping, and a search around the vertices `left`.
 
     Every vertex outside `left` has its padded box within the one of the memo's search, so a pair of
     them that overlaps now overlapped then and is among the memo's keys; the pairs that hold a vertex of
-    `left` are searched again (a masked search; a masked call is served by the memo only when no vertex left).
+    `left` are searched again (a masked search).
     """
     out = []
     for found, (Q, T, same) in zip(keys, _kinds(mesh)):  # the two kinds of pairs
@@ -111,29 +108,38 @@ def _kept_keys(mesh, v_lo, v_hi, keys, mask, masked, left, ordered):
             continue
         q_lo, q_hi, t_lo, t_hi = _boxes(v_lo, v_hi, Q, T, same)
         keep = np.empty(len(found), dtype=np.bool_)
-        pick(kept_pairs, len(found))(found, len(T), Q, T, q_lo, q_hi, t_lo, t_hi, mask, masked, left, keep)
+        pick(kept_pairs, len(found))(found, len(T), Q, T, q_lo, q_hi, t_lo, t_hi, left, keep)
         found = found[keep]
         if left.any():
-            again = _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, left, True, ordered)
+            again = _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, left, ordered)
             found = (np.insert(found, np.searchsorted(found, again), again) if ordered  # disjoint sorted lists
                      else np.concatenate([found, again]))
         out.append(found)
     return tuple(out)
 
 
-def _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked, ordered=True):
-    """Keys of the overlapping pairs: the grid of :func:`box_candidates`, or, for a mask that touches few
-    elements, every masked element tested against all (:func:`touching_candidates`, no grid to build)."""
-    if masked:
-        q_in, t_in = mask[Q].any(axis=1), mask[T].any(axis=1)
-        t_list = np.flatnonzero(t_in)
-        if int(q_in.sum()) * len(T) + len(Q) * len(t_list) <= GRID_TESTS * (len(Q) + len(T)):
-            keys = pick(touching_candidates, QUERY_WEIGHT * len(Q))(q_lo, q_hi, t_lo, t_hi, Q, T, same, q_in,
-                                                                    t_list)
-            if ordered:
-                keys.sort()  # each pair is found once, by one row
-            return keys
-    return pick(box_candidates, QUERY_WEIGHT * len(Q))(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, masked, ordered)
+def _search(q_lo, q_hi, t_lo, t_hi, Q, T, same, mask, ordered=True):
+    """Keys of the overlapping pairs: the grid of :func:`box_candidates`, or, with a vertex `mask` (not None), the
+    pairs that hold one of its vertices, from grids of the masked elements alone (:func:`subset_pairs`).
+
+    With a mask: every query against the targets that hold a masked vertex, then (two sets) every other
+    target against the queries that hold one; one set (edges): every edge against the masked ones, a pair
+    of two masked edges found from its lower one.
+    """
+    if mask is None:
+        return pick(box_candidates, QUERY_WEIGHT * len(Q))(q_lo, q_hi, t_lo, t_hi, Q, T, same, ordered)
+    q_in, t_in = mask[Q].any(axis=1), mask[T].any(axis=1)
+    every, none = np.ones(len(Q), dtype=np.bool_), np.zeros(max(len(Q), len(T)), dtype=np.bool_)
+    search = pick(subset_pairs, QUERY_WEIGHT * len(Q))
+    m = len(T)
+    if same:
+        keys = search(q_lo, q_hi, Q, every, t_in, np.flatnonzero(t_in), t_lo, t_hi, T, 2, m)
+    else:
+        keys = np.concatenate([search(q_lo, q_hi, Q, every, none, np.flatnonzero(t_in), t_lo, t_hi, T, 0, m),
+                               search(t_lo, t_hi, T, ~t_in, none, np.flatnonzero(q_in), q_lo, q_hi, Q, 1, m)])
+    if ordered:
+        keys.sort()  # each pair is found once
+    return keys
 
 
 def _own(n):
@@ -183,12 +189,13 @@ def cloth_candidate_rows(mesh, lo, hi, pad, vertices=None, memo=None, ordered=Tr
 
     memo : dict, optional
         Kept by the caller from call to call (:class:`~particles.collisions.candidate_cache.CandidateCache`
-        keeps one): the padded vertex boxes and the pairs of the last search without a mask. When at
-        most one vertex in ``LEFT_MAX`` has a padded box outside its box there, the pairs are taken from
-        that search's (those whose boxes still overlap) and only the pairs holding a vertex that left are
-        searched again: the continuous test's searches within the boxes of the step's proximity search
-        filter its pairs instead of building a grid (a masked search, when no vertex left). The pairs
-        are the same either way.
+        keeps one): the padded vertex boxes and the pairs of the last search without a mask. For a search
+        without a mask, when at most one vertex in ``LEFT_MAX`` has a padded box outside its box there,
+        the pairs are taken from that search's (those whose boxes still overlap) and only the pairs holding
+        a vertex that left are searched again: the continuous test's first search within the boxes of the
+        step's proximity search filters its pairs instead of building a grid. A masked search neither
+        reads nor replaces it (its small grids are quicker than filtering). The pairs are the same either
+        way.
     ordered : bool
         False: the rows come in an order fixed by the boxes, with their key as a fifth column (shape
         (k, 5)), and the caller sorts what it keeps by it (:func:`in_key_order`): the cloth pipeline keeps

@@ -44,7 +44,9 @@ move on straight lines ``x0 + t h vbar`` within the step):
 2b. **Strain limit** (optional, :mod:`particles.collisions.strain_limit`): the stretch springs longer
    than ``(1 + s) L0`` at ``x0 + h vbar`` are shortened by Provot's projection, alternating with the
    body stage; after stages 3 and 4, if a spring is too long again, the limit and both stages run again
-   (at most ``strain_rounds`` times), so the step ends with the continuous test.
+   (at most ``strain_rounds`` times), so the step ends with the continuous test. Stages 3 and 4 ended
+   with a motion free of contact, so the test that follows a limit starts with the pairs that hold a
+   vertex the limit (or the bodies) moved: the others move as they did.
 3. **Continuous detection** (:mod:`particles.collisions.ccd`) over ``x0 -> x0 + h vbar``:
    each colliding pair gets an inelastic impulse that stops its approach
    along the normal at the time of impact (and pushes it to
@@ -418,16 +420,18 @@ class ClothCollisions(BodyStage, ProximityStage, StrainLimitStage, ImpactZoneSta
             I = np.maximum(target[g] - vN, 0.0) / S[g]
             self._scatter(vbar, V[g], W[g], I[:, None] * N[g])
 
-    def _continuous(self, x0, vbar, t, h):
+    def _continuous(self, x0, vbar, t, h, changed=None):
         """Stages 3 and 4 on ``vbar``, in place.
 
+        With `changed` (shape (n,), bool), the motion was found free of contact before the vertices where it
+        holds moved: the first detection tests only the pairs that hold one of them.
         Returns (found, passes, zones, zone vertices, zone passes, anchored, converged).
         """
         found = passes = 0
         zones = zone_vertices = zone_passes = anchored = 0
         converged = True
         if self.ccd:
-            impacts, moved = self._detect(x0, vbar, h), None
+            impacts, moved = self._detect(x0, vbar, h, changed), None
             for passes in range(1, self.ccd_iterations + 1):  # a loop over detection passes
                 if passes > 1:
                     impacts = self._detect(x0, vbar, h, moved)
@@ -484,12 +488,15 @@ class ClothCollisions(BodyStage, ProximityStage, StrainLimitStage, ImpactZoneSta
             if self.bodies:
                 self._bodies(x0, vbar, t, h)
         sweeps = rounds = 0
+        clean = None  # vbar where the last continuous test ended without a contact
         for rounds in range(1, self.strain_rounds + 1):  # a loop over strain limits, each closed by the ccd
             if self.strain_limit is not None:
                 sweeps += self._limit_strain(x0, vbar, t, h)
-            counts = self._continuous(x0, vbar, t, h)
+            changed = None if clean is None else np.any(vbar != clean, axis=1)  # what the limit moved since
+            counts = self._continuous(x0, vbar, t, h, changed)
             if self.strain_limit is None or not counts[-1] or self._holds(self._strain(x0, vbar, h)):
                 break
+            clean = vbar.copy()
         self.last = ClothCollisionResult(nv, ne, npairs, *counts, sweeps, rounds, self._strain(x0, vbar, h))
         return x0 + h * vbar, v1 + (vbar - vbar0)
 

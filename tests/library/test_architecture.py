@@ -289,7 +289,7 @@ KERNEL_LAWS = {
     "particles.collisions.contact_kernels.proximity_rows": "particles.collisions.proximity.approaching_within",
     "particles.collisions.contact_kernels.first_contact_pairs": "particles.collisions.ccd.cubic_of",
     "particles.collisions.broad_kernels.box_candidates": "particles.collisions.triangle_crossing.intervals_overlap",
-    "particles.collisions.broad_kernels.touching_candidates": "particles.collisions.triangle_crossing.intervals_overlap",
+    "particles.collisions.broad_kernels.subset_pairs": "particles.collisions.triangle_crossing.intervals_overlap",
     "particles.collisions.broad_kernels.kept_pairs": "particles.collisions.triangle_crossing.intervals_overlap",
 }
 

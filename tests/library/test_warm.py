@@ -38,7 +38,7 @@ def test_the_cloth_collisions_part_runs_every_self_collision_kernel(monkeypatch)
     monkeypatch.setattr(cloth, "pick", pick)
     with using("numba"):
         _folded_sheet()
-    assert {"box_candidates", "touching_candidates", "kept_pairs", "proximity_rows", "proximity_impulses",
+    assert {"box_candidates", "subset_pairs", "kept_pairs", "proximity_rows", "proximity_impulses",
             "first_contact_pairs", "key_rows"} <= met
 
 

@@ -110,14 +110,14 @@ def test_vertex_face_and_edge_edge_searches_share_one_kernel():
     lo, hi = x - 0.1, x + 0.1
     masked = np.zeros(mesh.n, dtype=bool)
     masked[[3, 17]] = True
-    searches = [bk.box_candidates, bk.touching_candidates]
+    searches = [bk.box_candidates, bk.subset_pairs]
     (Q, T, same), *others = compiled_cloth._kinds(mesh)
     boxes = compiled_cloth._boxes(lo, hi, Q, T, same)
     assert not Q.flags.writeable
-    for mask, is_masked in ((masked, True), (np.zeros(0, dtype=bool), False)):  # the grid and the masked search
-        compiled_cloth._search(*boxes, Q, T, same, mask, is_masked)
+    for mask in (masked, None):  # the masked search and the grid
+        compiled_cloth._search(*boxes, Q, T, same, mask)
     before = _variants(*searches)
     for Q, T, same in others:  # edges against edges
-        for mask, is_masked in ((masked, True), (np.zeros(0, dtype=bool), False)):
-            compiled_cloth._search(*compiled_cloth._boxes(lo, hi, Q, T, same), Q, T, same, mask, is_masked)
+        for mask in (masked, None):
+            compiled_cloth._search(*compiled_cloth._boxes(lo, hi, Q, T, same), Q, T, same, mask)
     assert _variants(*searches) == before

@@ -85,9 +85,10 @@ def test_a_search_within_an_earlier_ones_boxes_gives_the_pairs_of_a_new_search(l
 
 
 @pytest.mark.parametrize("left", [0, 1], ids=["every box within", "a vertex left its box"])
-def test_a_masked_search_reads_the_memo_when_no_vertex_left_it_and_never_replaces_it(left, monkeypatch):
-    """The memo holds the pairs of a search without a mask: a masked search within its boxes filters them (the
-    continuous test's passes after the first), one with a vertex outside searches; the memo stays as it was."""
+def test_a_masked_search_neither_reads_nor_replaces_the_memo(left, monkeypatch):
+    """The memo holds the pairs of a search without a mask; a masked search (the continuous test's passes after
+    the first) walks grids of the masked elements instead, whether or not a vertex left the memo's boxes,
+    finds the pairs of a search without the memo, and leaves the memo as it was."""
     mesh, x, dx = crumpled(6)
     lo, hi = np.minimum(x, x + dx), np.maximum(x, x + dx)
     memo = {}
@@ -101,12 +102,40 @@ def test_a_masked_search_reads_the_memo_when_no_vertex_left_it_and_never_replace
     kept = cloth._kept_keys
     monkeypatch.setattr(cloth, "_kept_keys", lambda *a: used.append(1) or kept(*a))
     got = cloth.cloth_candidate_rows(mesh, lo, hi, 0.01, mask, memo=memo)
-    ref = cloth.cloth_candidate_rows(mesh, lo, hi, 0.01, mask)
-    assert bool(used) == (not left)
-    assert all(memo[k] is before[k] for k in before)
-    assert len(ref[0]) > 10 and len(ref[1]) > 10
-    for a, b in zip(ref, got):
-        np.testing.assert_array_equal(a, b)
+    ref = candidates_touching(mesh, lo, hi, 0.01, mask)
+    assert not used
+    assert all(memo[k] is before[k] for k in before) and memo.keys() == before.keys()
+    assert len(got[0]) > 10 and len(got[1]) > 10
+    np.testing.assert_array_equal(got[0], np.concatenate([ref[0][:, None], mesh.faces[ref[1]]], axis=1))
+    np.testing.assert_array_equal(got[1], np.concatenate([mesh.edges[ref[2]], mesh.edges[ref[3]]], axis=1))
+
+
+@pytest.mark.parametrize("same", [False, True], ids=["vertices against faces", "edges against edges"])
+def test_a_masked_search_finds_each_pair_once_on_any_thread_count(same):
+    """The masked grids report every pair that holds a masked vertex once (two masked elements too), in an order
+    fixed by the boxes, the same bits on one thread and on two; an empty mask finds nothing."""
+    mesh, x, dx = crumpled(10, n=24)
+    lo, hi = np.minimum(x, x + dx) - 0.02, np.maximum(x, x + dx) + 0.02
+    Q, T, _ = cloth._kinds(mesh)[same]
+    mask = np.zeros(mesh.n, dtype=bool)
+    mask[np.random.default_rng(10).choice(mesh.n, 40, replace=False)] = True
+    boxes = cloth._boxes(lo, hi, Q, T, same)
+    whole = cloth._search(*boxes, Q, T, same, None)
+    q, t = np.divmod(whole, len(T))
+    want = whole[mask[Q[q]].any(axis=1) | mask[T[t]].any(axis=1)]
+    before = numba.get_num_threads()
+    runs = []
+    try:
+        for threads in (1, numba.config.NUMBA_NUM_THREADS):
+            numba.set_num_threads(threads)
+            runs.append(cloth._search(*boxes, Q, T, same, mask, ordered=False))
+    finally:
+        numba.set_num_threads(before)
+    assert len(want) > 50
+    assert runs[0].tobytes() == runs[1].tobytes()
+    assert len(np.unique(runs[0])) == len(runs[0])  # once each
+    np.testing.assert_array_equal(np.sort(runs[0]), want)
+    assert len(cloth._search(*boxes, Q, T, same, np.zeros(mesh.n, dtype=bool))) == 0
 
 
 def _in_key_order(rows):
@@ -416,8 +445,8 @@ def test_same_bits_on_one_and_two_threads():
             f_lo, f_hi = np.empty((mesh.m, 3)), np.empty((mesh.m, 3))
             from particles.collisions.broad_kernels import corner_bounds  # noqa: PLC0415
             corner_bounds(v_lo, v_hi, mesh.faces, f_lo, f_hi)
-            keys = [box_candidates(v_lo, v_hi, f_lo, f_hi, cloth._own(mesh.n), mesh.faces, False,
-                                   np.zeros(0, dtype=bool), False, ordered) for ordered in (True, False)]
+            keys = [box_candidates(v_lo, v_hi, f_lo, f_hi, cloth._own(mesh.n), mesh.faces, False, ordered)
+                    for ordered in (True, False)]
             rows = rows_of(k)
             hit, t = np.empty(len(rows), dtype=bool), np.full(len(rows), np.nan)
             nrm, w = np.full((len(rows), 3), np.nan), np.full((len(rows), 4), np.nan)
