@@ -139,3 +139,30 @@ def test_the_numpy_limit_needs_no_numba():
             "print('numba' in sys.modules, max(r.max_strain for r in cc.history) <= 0.1 + 1e-12)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.split() == ["False", "True"]
+
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_a_continuous_test_from_the_vertices_moved_since_a_clean_one_finds_what_a_whole_one_finds(backend):
+    """After a limit, the pipeline's continuous test starts from the pairs that hold a vertex moved since the last
+    test ended free of contact (``changed``): the same impacts and velocities as a test of every pair."""
+    if backend not in backends.available():
+        pytest.skip("numba is not installed")
+    n = 14
+    rng = np.random.default_rng(4)
+    mesh = TriangleMesh.grid(n, n)
+    u, v = np.meshgrid(np.linspace(0, 0.5, n), np.linspace(0, 0.5, n))
+    x0 = np.stack([u.ravel(), v.ravel(), 0.05 * np.sin(20 * u.ravel()) * np.cos(15 * v.ravel())], axis=1)
+    vbar = 0.5 * rng.standard_normal(x0.shape)
+    cc = ClothCollisions(mesh, 0.01, backend=backend)
+    assert cc._continuous(x0, vbar, 0.0, H)[-1]  # converged: the motion is free of contact
+    assert len(intersections(x0 + H * vbar, mesh.faces)) == 0
+    changed = np.zeros(mesh.n, dtype=bool)
+    changed[rng.choice(mesh.n, 12, replace=False)] = True
+    vbar[changed] += 4.0 * rng.standard_normal((12, 3))  # a few vertices now move fast: impacts
+    whole = vbar.copy()
+    counts = cc._continuous(x0, whole, 0.0, H)
+    masked = cc._continuous(x0, vbar, 0.0, H, changed)
+    assert counts[0] > 0 and masked == counts
+    np.testing.assert_allclose(vbar, whole, rtol=0, atol=1e-12)
+    assert len(intersections(x0 + H * vbar, mesh.faces)) == 0
