@@ -120,9 +120,12 @@ class StrainLimitStage:
     def _limit_strain(self, x0, vbar, t, h):
         """Alternate Provot's projection and the body stage until both hold; returns the sweeps made.
 
-        At most ``strain_rounds`` alternations, the bodies' vertices in each, their edge samples once
-        at the end; the last word is the bodies' (a vertex never ends in a body), and the caller checks
-        the strain again after its continuous test.
+        At most ``strain_rounds`` alternations, each with the whole body stage (vertices and edge
+        samples); the last word is the bodies' (a vertex never ends in a body), and the caller checks
+        the strain again after its continuous test. The edge samples belong in every alternation: over a
+        box's corner, a limit whose alternations moved the vertices alone, the samples once after them,
+        ended its steps with springs at up to 13.8% (24^2) and 18.1% (40^2), the samples' push having the
+        last word; with them in each, within 10%.
         """
         sweeps = 0
         for _ in range(self.strain_rounds):  # a loop over alternations of the two projections
@@ -132,7 +135,5 @@ class StrainLimitStage:
             sweeps += self._project_strain(x0, vbar, h)[1]
             if not self.bodies:
                 break
-            self._bodies(x0, vbar, t, h, edges=False)  # the vertices; the edge samples once, at the end
-        if sweeps and self.bodies:
             self._bodies(x0, vbar, t, h)
         return sweeps
