@@ -96,8 +96,8 @@ def test_over_a_box_corner_the_edge_samples_do_not_have_the_last_word():
 @pytest.mark.parametrize("rounds, holds", [(24, True), (8, False)])
 def test_a_sheet_pinned_by_an_edge_and_draped_over_a_box_stays_within_the_limit(rounds, holds):
     """40^2, pinned by its top edge, falling over a box: around the box's edges the limit and the body stage
-    converge slowly, and the default of 24 alternations (and rounds) keeps every step within 10% (8 did not:
-    13.5% by 0.28 s)."""
+    converge slowly; 24 alternations (and rounds) keep every step within 10%, the default 8 does not (13.5%
+    by 0.28 s)."""
     n = 40
     c = cloth(n, n, width=0.8, height=0.8, plane="horizontal", origin=(-0.4, -0.4, 0.45), pins="top edge",
               scaling="physical", stretch_modulus=200.0, damping=0.2)
