@@ -291,53 +291,18 @@ def subset_grid(lo, hi, idx):
     return s_lo, s_hi, origin, cell, shape, ptr, items, reach
 
 
-def walk_subset(k, w_lo, w_hi, W, idx, s_lo, s_hi, S, origin, cell, shape, ptr, items, reach, rule, m, out, start,
-                write):
-    """Walker `k`'s pairs with the elements ``idx`` of a :func:`subset_grid`: keys written into ``out[start:]`` when
-    `write`; their count.
-
-    A pair is an overlap of the closed boxes of walker `k` (``w_lo, w_hi``, vertices ``W[k]``) and element
-    ``s = idx[e]`` (``s_lo[e], s_hi[e]``, vertices ``S[s]``) that shares no vertex. Its key, by `rule`:
-    0, the walker a query and the element a target, ``k m + s``; 1, the walker a target and the element a
-    query, ``s m + k``; 2, one set (edges against edges), ``min m + max``, and a walker that is itself an
-    element of the grid (rule 3) keeps only the elements above it, so that a pair of two elements is met once.
-    Each element is met in one cell, the componentwise maximum of the two boxes' lowest cells (:func:`wanted`).
-    """
-    if not overlap(w_lo, w_hi, k, reach[:1], reach[1:], 0):
-        return 0
-    found = 0
-    c00, c10, c01, c11, c02, c12 = cell_range(k, w_lo, w_hi, origin, cell, shape)
-    for i in range(c00, c10 + 1):
-        for j in range(c01, c11 + 1):
-            for l in range(c02, c12 + 1):
-                c = 8 * ((i * shape[1] + j) * shape[2] + l)
-                for sub in range(8):
-                    if not wanted(sub, i, j, l, c00, c01, c02):
-                        continue
-                    for p in range(ptr[c + sub], ptr[c + sub + 1]):
-                        e = items[p]
-                        s = idx[e]
-                        if rule == 3 and s <= k:
-                            continue
-                        if not overlap(w_lo, w_hi, k, s_lo, s_hi, e) or shares_vertex(W, k, S, s):
-                            continue
-                        if write:
-                            if rule == 1:
-                                out[start + found] = s * m + k
-                            elif rule == 0 or s > k:
-                                out[start + found] = k * m + s
-                            else:
-                                out[start + found] = s * m + k
-                        found += 1
-    return found
-
-
 @jit(parallel=True)
 def subset_pairs(w_lo, w_hi, W, walking, own, idx, lo, hi, S, rule, m):
     """The keys of the pairs of every walker where `walking` holds with the elements `idx` of boxes ``lo, hi``
-    (vertices `S`), from a grid of those elements alone (:func:`subset_grid`; :func:`walk_subset`, with
-    `rule`, or rule 3 for a walker where `own` holds), unsorted: walker by walker, an order fixed by the
-    boxes, the same on any number of threads.
+    (vertices `S`), from a grid of those elements alone (:func:`subset_grid`), unsorted: walker by walker,
+    an order fixed by the boxes, the same on any number of threads.
+
+    Each walker queries the grid as :func:`box_candidates`' queries do (:func:`query_bound`, :func:`query`;
+    none when its box misses the box around the elements). A pair is an overlap of the closed boxes that
+    shares no vertex; its key, by `rule`: 0, the walker a query and the element a target, ``k m + s``; 1,
+    the walker a target and the element a query, ``s m + k``; 2, one set (edges against edges),
+    ``min m + max``, and a walker where `own` holds (itself an element of the grid) keeps only the elements
+    above it, so that a pair of two elements is met once.
 
     The pairs of a mask are few: :func:`particles.collisions.compiled_stages`' masked search calls this
     with the masked targets (walked by every query) and the masked queries (walked by the targets that hold
@@ -348,23 +313,41 @@ def subset_pairs(w_lo, w_hi, W, walking, own, idx, lo, hi, S, rule, m):
     if len(idx) == 0:
         return np.zeros(0, dtype=np.int64)
     s_lo, s_hi, origin, cell, shape, ptr, items, reach = subset_grid(lo, hi, idx)
+    S_in = np.empty((len(idx), S.shape[1]), dtype=np.int64)  # the elements' vertices, in the grid's numbering
+    for e in range(len(idx)):
+        for j in range(S.shape[1]):
+            S_in[e, j] = S[idx[e], j]
     nw = len(w_lo)
+    bounds = np.zeros(nw + 1, dtype=np.int64)
+    for k in prange(nw):
+        if walking[k] and overlap(w_lo, w_hi, k, reach[:1], reach[1:], 0):
+            bounds[k + 1] = query_bound(k, w_lo, w_hi, origin, cell, shape, ptr)
+    for k in range(nw):
+        bounds[k + 1] += bounds[k]
+    met = np.empty(bounds[nw], dtype=np.int64)
     found = np.zeros(nw + 1, dtype=np.int64)
-    empty = np.zeros(0, dtype=np.int64)
     blocks = (nw + QUERY_BLOCK - 1) // QUERY_BLOCK
-    for b in prange(blocks):  # each walker's count
+    for b in prange(blocks):  # each walker's elements (the grid's numbering) into its slice, then those it keeps
         for k in range(b * QUERY_BLOCK, min(nw, (b + 1) * QUERY_BLOCK)):
-            if walking[k]:
-                found[k + 1] = walk_subset(k, w_lo, w_hi, W, idx, s_lo, s_hi, S, origin, cell, shape, ptr, items,
-                                           reach, 3 if own[k] else rule, m, empty, 0, False)
+            start = bounds[k]
+            if bounds[k + 1] == start:
+                continue
+            f = query(k, w_lo, w_hi, s_lo, s_hi, origin, cell, shape, ptr, items, W, S_in, False, met, start)
+            kept = 0
+            for e in range(f):
+                if not own[k] or idx[met[start + e]] > k:
+                    met[start + kept] = met[start + e]
+                    kept += 1
+            found[k + 1] = kept
     for k in range(nw):
         found[k + 1] += found[k]
     keys = np.empty(found[nw], dtype=np.int64)
-    for b in prange(blocks):  # each walker's keys, into its slice
+    for b in prange(blocks):  # the keys, walker by walker
         for k in range(b * QUERY_BLOCK, min(nw, (b + 1) * QUERY_BLOCK)):
-            if found[k + 1] > found[k]:
-                walk_subset(k, w_lo, w_hi, W, idx, s_lo, s_hi, S, origin, cell, shape, ptr, items, reach,
-                            3 if own[k] else rule, m, keys, found[k], True)
+            for e in range(found[k + 1] - found[k]):
+                s = idx[met[bounds[k] + e]]
+                lower, upper = (s, k) if rule == 1 or (rule == 2 and s < k) else (k, s)
+                keys[found[k] + e] = lower * m + upper
     return keys
 
 
@@ -383,5 +366,5 @@ def kept_pairs(keys, m, Q, T, q_lo, q_hi, t_lo, t_hi, left, keep):
 
 
 for _helper in (grid_shape, cell_of, cell_table, wanted, shares_vertex, holds_masked, cell_range, overlap, query,
-                query_bound, subset_grid, walk_subset):  # compiled into the kernels that call them
+                query_bound, subset_grid):  # compiled into the kernels that call them
     inline(_helper, into="never")
